@@ -1,0 +1,122 @@
+//! Errors of the library and the exit codes the CLI maps them to.
+
+use std::path::PathBuf;
+
+use crate::kernel::SimTime;
+
+/// Everything that can stop a command.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The scenario file is not valid JSON (or does not match the schema's types).
+    #[error("{file}: {message} at line {line}, column {column}")]
+    Parse {
+        /// File being read.
+        file: String,
+        /// What serde_json reported.
+        message: String,
+        /// 1-based line of the problem.
+        line: usize,
+        /// 1-based column of the problem.
+        column: usize,
+    },
+    /// A field of the scenario has a bad value; `path` names it (`forces[2].until`).
+    #[error("{path}: {message}")]
+    Invalid {
+        /// Field path inside the scenario file.
+        path: String,
+        /// What is wrong, with the offending value.
+        message: String,
+    },
+    /// A file could not be read or written.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file or directory.
+        path: PathBuf,
+        /// The operating-system error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The simulation state diverged (non-finite values or a violation beyond the bound).
+    #[error("{0}")]
+    Diverged(Divergence),
+    /// A numerical method failed without the state diverging (e.g. a singular `J_s`).
+    #[error("numerical failure at t = {time}: {message}")]
+    Numerical {
+        /// Simulated time of the failure.
+        time: SimTime,
+        /// What failed.
+        message: String,
+    },
+}
+
+/// Where and how a run diverged.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Divergence {
+    /// Simulated time of the first step whose state failed the check.
+    pub time: SimTime,
+    /// Computing node (0 for a monolithic run).
+    pub node: usize,
+    /// The link (or, for an unlinked body, the body) whose values failed.
+    pub place: Place,
+    /// What was seen: `|w| = 1.3 m > bound 1 m`, or `non-finite z`.
+    pub what: String,
+}
+
+impl std::fmt::Display for Divergence {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "diverged at t = {} on node {}, {}: {}",
+            self.time, self.node, self.place, self.what
+        )
+    }
+}
+
+/// A named element of the model, for error messages.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Place {
+    /// Link number k (1-based, file order), printed `link L<k>`.
+    Link(usize),
+    /// Body id, printed `body B<id>`.
+    Body(u32),
+}
+
+impl std::fmt::Display for Place {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Place::Link(k) => write!(f, "link L{k}"),
+            Place::Body(id) => write!(f, "body B{id}"),
+        }
+    }
+}
+
+impl Error {
+    /// Shorthand for an [`Error::Invalid`].
+    pub fn invalid(path: impl Into<String>, message: impl Into<String>) -> Error {
+        Error::Invalid {
+            path: path.into(),
+            message: message.into(),
+        }
+    }
+
+    /// Shorthand for an [`Error::Io`].
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Error {
+        Error::Io {
+            path: path.into(),
+            source,
+        }
+    }
+
+    /// Process exit code: 2 for bad input, 3 for a diverged or numerically failed run,
+    /// 1 for I/O failures.
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            Error::Parse { .. } | Error::Invalid { .. } => 2,
+            Error::Diverged(_) | Error::Numerical { .. } => 3,
+            Error::Io { .. } => 1,
+        }
+    }
+}
+
+/// Result with the crate's [`Error`].
+pub type Result<T> = std::result::Result<T, Error>;

@@ -1,0 +1,197 @@
+//! The rate function of the `(x, v, z)` ODE (SPEC section 2).
+//!
+//! Stages, in this order because each needs the previous one's results:
+//! 1. body frames: world inertia `R I Rᵀ` and its inverse (rigid path);
+//! 2. body loads: external forces at `t`, the held extra forces, gyroscopic torque
+//!    `−ω × (I ω)`;
+//! 3. link kinematics: `w = |P_a − P_b| − L`, `n`, `ẇ = J v`, `J̇ v`; under SMC the
+//!    current multipliers' forces `Jᵀ z` are added to the loads;
+//! 4. accelerations `M⁻¹ (loads)` and `ẅ = J a + J̇ v`;
+//! 5. multiplier law: SMC solves `μ² J M⁻¹ Jᵀ ż = −(2μẅ + ẇ) − K sat(s/ε)` with
+//!    `s = μ²ẅ + 2μẇ + w`; Baumgarte solves `J M⁻¹ Jᵀ z = −ẅ₀ − 2αẇ − β²w` (ẅ₀ without
+//!    link forces) and adds `M⁻¹ Jᵀ z` to the accelerations.
+
+use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
+
+use super::solver::SolveError;
+use super::state::{Rates, State};
+use super::system::System;
+use crate::kernel::SimTime;
+use crate::scenario::model::Stabilizer;
+
+/// Why a rate evaluation failed.
+#[derive(Debug, Clone, PartialEq)]
+pub enum EvalError {
+    /// A link's kinematics became non-finite (0-based link index).
+    NonFinite {
+        /// Link index.
+        link: usize,
+    },
+    /// The multiplier solve failed.
+    Solve(SolveError),
+}
+
+/// `sat(y)`: `y` inside the boundary layer `|y| ≤ 1`, `sign(y)` outside.
+pub fn sat(y: f64) -> f64 {
+    y.clamp(-1.0, 1.0)
+}
+
+impl System {
+    /// Evaluates the rates of `state` at time `t` into `out`.
+    pub fn rates(&mut self, t: SimTime, state: &State, out: &mut Rates) -> Result<(), EvalError> {
+        self.body_frames(state);
+        self.body_loads(t, state);
+        let smc = matches!(self.stabilizer, Stabilizer::Smc { .. });
+        self.link_kinematics(state, smc)?;
+        self.accelerations();
+        self.constraint_accelerations();
+        match self.stabilizer {
+            Stabilizer::Smc { mu, k, epsilon } => {
+                let mu2 = mu * mu;
+                for l in 0..self.links.len() {
+                    let (w, wd, wdd) = (self.ws.w[l], self.ws.wd[l], self.ws.wdd[l]);
+                    let s = mu2 * wdd + 2.0 * mu * wd + w;
+                    let alpha_hat = 2.0 * mu * wdd + wd;
+                    self.ws.rhs[l] = (-alpha_hat - k * sat(s / epsilon)) / mu2;
+                }
+                self.solver
+                    .solve(&self.geo, &self.mass, &self.ws.rhs, &mut self.ws.sol)
+                    .map_err(EvalError::Solve)?;
+                out.z.copy_from_slice(&self.ws.sol);
+            }
+            Stabilizer::Baumgarte { alpha, beta } => {
+                for l in 0..self.links.len() {
+                    let (w, wd, wdd) = (self.ws.w[l], self.ws.wd[l], self.ws.wdd[l]);
+                    self.ws.rhs[l] = -wdd - 2.0 * alpha * wd - beta * beta * w;
+                }
+                self.solver
+                    .solve(&self.geo, &self.mass, &self.ws.rhs, &mut self.ws.sol)
+                    .map_err(EvalError::Solve)?;
+                self.ws.z_alg.copy_from_slice(&self.ws.sol);
+                self.add_multiplier_accelerations();
+                out.z.fill(0.0);
+            }
+        }
+        out.p.copy_from_slice(&state.v);
+        out.v.copy_from_slice(&self.ws.acc);
+        if self.rigid {
+            out.omega.copy_from_slice(&self.ws.alpha);
+            for ((dq, q), w) in out.q.iter_mut().zip(&state.q).zip(&state.omega) {
+                *dq = Quaternion::from_imag(*w) * q * 0.5;
+            }
+        }
+        Ok(())
+    }
+
+    /// Stage 1: world inertia and its inverse per body.
+    fn body_frames(&mut self, state: &State) {
+        if !self.rigid {
+            return;
+        }
+        for i in 0..state.q.len() {
+            let r = *UnitQuaternion::new_normalize(state.q[i]).to_rotation_matrix().matrix();
+            let d = self.inertia[i];
+            let inv = if self.mass.inv_mass[i] == 0.0 {
+                Vector3::zeros()
+            } else {
+                d.map(|x| 1.0 / x)
+            };
+            self.ws.inertia_world[i] = r * Matrix3::from_diagonal(&d) * r.transpose();
+            self.mass.inv_inertia[i] = r * Matrix3::from_diagonal(&inv) * r.transpose();
+        }
+    }
+
+    /// Stage 2: external, held and gyroscopic loads.
+    fn body_loads(&mut self, t: SimTime, state: &State) {
+        self.ws.force.copy_from_slice(&self.extra_force);
+        for f in &self.forces {
+            self.ws.force[f.body] += f.at(t);
+        }
+        if self.rigid {
+            for i in 0..state.omega.len() {
+                let w = state.omega[i];
+                self.ws.torque[i] = -w.cross(&(self.ws.inertia_world[i] * w));
+            }
+        }
+    }
+
+    /// Stage 3: per-link kinematics (and, under SMC, the current multipliers' forces).
+    fn link_kinematics(&mut self, state: &State, smc: bool) -> Result<(), EvalError> {
+        for (l, link) in self.links.iter().enumerate() {
+            let (a, b) = (link.a, link.b);
+            let (mut delta, mut u) = (state.p[a] - state.p[b], state.v[a] - state.v[b]);
+            let (mut ra, mut rb) = (Vector3::zeros(), Vector3::zeros());
+            if self.rigid {
+                ra = UnitQuaternion::new_normalize(state.q[a]) * link.anchor_a;
+                rb = UnitQuaternion::new_normalize(state.q[b]) * link.anchor_b;
+                delta += ra - rb;
+                u += state.omega[a].cross(&ra) - state.omega[b].cross(&rb);
+            }
+            let d = delta.norm();
+            let n = delta / d;
+            let wd = n.dot(&u);
+            let mut jdv = (u.norm_squared() - wd * wd) / d;
+            if self.rigid {
+                let (wa, wb) = (state.omega[a], state.omega[b]);
+                jdv += n.dot(&(wa.cross(&wa.cross(&ra)) - wb.cross(&wb.cross(&rb))));
+                self.ws.ra[l] = ra;
+                self.ws.rb[l] = rb;
+                self.geo.ca[l] = ra.cross(&n);
+                self.geo.cb[l] = rb.cross(&n);
+            }
+            if !(d > 0.0 && jdv.is_finite() && wd.is_finite()) {
+                return Err(EvalError::NonFinite { link: l });
+            }
+            self.geo.n[l] = n;
+            self.ws.w[l] = d - link.length;
+            self.ws.wd[l] = wd;
+            self.ws.jdv[l] = jdv;
+            if smc {
+                let z = state.z[l];
+                self.ws.force[a] += n * z;
+                self.ws.force[b] -= n * z;
+                if self.rigid {
+                    self.ws.torque[a] += self.geo.ca[l] * z;
+                    self.ws.torque[b] -= self.geo.cb[l] * z;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Stage 4a: `a = M⁻¹ F`, `α = I⁻¹ τ`.
+    fn accelerations(&mut self) {
+        for i in 0..self.ws.acc.len() {
+            self.ws.acc[i] = self.ws.force[i] * self.mass.inv_mass[i];
+        }
+        for i in 0..self.ws.alpha.len() {
+            self.ws.alpha[i] = self.mass.inv_inertia[i] * self.ws.torque[i];
+        }
+    }
+
+    /// Stage 4b: `ẅ = J a + J̇ v` per link.
+    fn constraint_accelerations(&mut self) {
+        for (l, &(a, b)) in self.geo.ends.iter().enumerate() {
+            let mut wdd = self.geo.n[l].dot(&(self.ws.acc[a] - self.ws.acc[b])) + self.ws.jdv[l];
+            if self.rigid {
+                wdd += self.geo.ca[l].dot(&self.ws.alpha[a]) - self.geo.cb[l].dot(&self.ws.alpha[b]);
+            }
+            self.ws.wdd[l] = wdd;
+        }
+    }
+
+    /// Baumgarte: adds `M⁻¹ Jᵀ z` to the accelerations.
+    fn add_multiplier_accelerations(&mut self) {
+        for (l, &(a, b)) in self.geo.ends.iter().enumerate() {
+            let z = self.ws.z_alg[l];
+            let f = self.geo.n[l] * z;
+            self.ws.acc[a] += f * self.mass.inv_mass[a];
+            self.ws.acc[b] -= f * self.mass.inv_mass[b];
+            if self.rigid {
+                let (ca, cb) = (self.geo.ca[l] * z, self.geo.cb[l] * z);
+                self.ws.alpha[a] += self.mass.inv_inertia[a] * ca;
+                self.ws.alpha[b] -= self.mass.inv_inertia[b] * cb;
+            }
+        }
+    }
+}

@@ -1,0 +1,504 @@
+//! The multiplier system `A x = b` with `A = J M⁻¹ Jᵀ` (m × m, one row per link).
+//!
+//! `A` is never formed densely. Its entry `(k, l)` is non-zero only when links `k` and
+//! `l` share a body, so:
+//! - the exact path assembles `A` in compressed-column form on a sparsity pattern
+//!   computed once per run and re-factorizes it with a sparse Cholesky
+//!   (`nalgebra-sparse`, symbolic analysis reused via `refactor`);
+//! - the iterative path applies `A` matrix-free (`Jᵀ`, then `M⁻¹`, then `J`: two sweeps
+//!   over links, one over bodies) inside a Jacobi-preconditioned conjugate gradient
+//!   warm-started from the previous solution, with a fixed iteration budget.
+//!
+//! Both cost O(links) per product; the CG solve is O(links · iterations).
+
+use std::collections::BTreeMap;
+
+use nalgebra::{DVector, Matrix3, Vector3};
+use nalgebra_sparse::factorization::CscCholesky;
+use nalgebra_sparse::pattern::SparsityPattern;
+use nalgebra_sparse::CscMatrix;
+
+use crate::scenario::model::Solver;
+
+/// Per-link Jacobian data: `J_k = [nᵀ, c_aᵀ]` on body `a`, `[−nᵀ, −c_bᵀ]` on body `b`.
+#[derive(Debug, Clone)]
+pub struct Geometry {
+    /// `(a, b)` body indices per link.
+    pub ends: Vec<(usize, usize)>,
+    /// Unit vector from `b`'s anchor to `a`'s.
+    pub n: Vec<Vector3<f64>>,
+    /// `c_a = (R r_a) × n` (rigid path only; empty for point masses).
+    pub ca: Vec<Vector3<f64>>,
+    /// `c_b = (R r_b) × n` (rigid path only).
+    pub cb: Vec<Vector3<f64>>,
+}
+
+/// Inverse mass data per body.
+#[derive(Debug, Clone)]
+pub struct MassData {
+    /// 1/m [1/kg]; 0 makes a body immovable.
+    pub inv_mass: Vec<f64>,
+    /// World-frame inverse inertia [1/(kg·m²)] (rigid path only).
+    pub inv_inertia: Vec<Matrix3<f64>>,
+}
+
+/// Why a solve failed.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SolveError {
+    /// The Cholesky factorization met a non-positive pivot (`A` singular: redundant
+    /// links, or non-finite geometry).
+    NotPositiveDefinite,
+}
+
+/// One contribution to an entry of `A` through a shared body.
+#[derive(Debug, Clone, Copy)]
+struct Entry {
+    body: usize,
+    k: usize,
+    l: usize,
+    /// Product of the two links' signs on the body (+1 for side `a`, −1 for side `b`).
+    sign: f64,
+    side_k: Side,
+    side_l: Side,
+    value: usize,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Side {
+    A,
+    B,
+}
+
+/// Exact sparse Cholesky state.
+#[derive(Debug, Clone)]
+struct Exact {
+    pattern: SparsityPattern,
+    entries: Vec<Entry>,
+    values: Vec<f64>,
+    factor: Option<CscCholesky<f64>>,
+    rhs: DVector<f64>,
+}
+
+/// CG scratch.
+#[derive(Debug, Clone)]
+struct Cg {
+    max_iterations: usize,
+    tolerance: f64,
+    r: Vec<f64>,
+    z: Vec<f64>,
+    p: Vec<f64>,
+    ap: Vec<f64>,
+    diag: Vec<f64>,
+}
+
+/// The `J M⁻¹ Jᵀ` solver of a run, with its scratch memory.
+#[derive(Debug, Clone)]
+pub struct JsSolver {
+    exact: Option<Exact>,
+    cg: Option<Cg>,
+    /// Per-body force accumulator of the matrix-free product.
+    f: Vec<Vector3<f64>>,
+    /// Per-body torque accumulator (rigid path).
+    t: Vec<Vector3<f64>>,
+    last_iterations: usize,
+}
+
+impl JsSolver {
+    /// Prepares a solver for `bodies` bodies and links with the given ends.
+    pub fn new(kind: Solver, bodies: usize, ends: &[(usize, usize)]) -> JsSolver {
+        let m = ends.len();
+        let (exact, cg) = match kind {
+            Solver::Cholesky => (Some(Exact::new(bodies, ends)), None),
+            Solver::ConjugateGradient {
+                max_iterations,
+                tolerance,
+            } => (
+                None,
+                Some(Cg {
+                    max_iterations,
+                    tolerance,
+                    r: vec![0.0; m],
+                    z: vec![0.0; m],
+                    p: vec![0.0; m],
+                    ap: vec![0.0; m],
+                    diag: vec![0.0; m],
+                }),
+            ),
+        };
+        JsSolver {
+            exact,
+            cg,
+            f: vec![Vector3::zeros(); bodies],
+            t: vec![Vector3::zeros(); bodies],
+            last_iterations: 0,
+        }
+    }
+
+    /// Iterations of the last CG solve (0 on the exact path).
+    pub fn last_iterations(&self) -> usize {
+        self.last_iterations
+    }
+
+    /// Solves `A x = b`. On entry `x` holds the warm start (used by CG only).
+    pub fn solve(
+        &mut self,
+        geo: &Geometry,
+        mass: &MassData,
+        b: &[f64],
+        x: &mut [f64],
+    ) -> Result<(), SolveError> {
+        if b.is_empty() {
+            return Ok(());
+        }
+        if let Some(exact) = &mut self.exact {
+            self.last_iterations = 0;
+            return exact.solve(geo, mass, b, x);
+        }
+        if let Some(mut cg) = self.cg.take() {
+            let result = self.solve_cg(&mut cg, geo, mass, b, x);
+            self.cg = Some(cg);
+            return result;
+        }
+        Ok(())
+    }
+
+    fn solve_cg(
+        &mut self,
+        cg: &mut Cg,
+        geo: &Geometry,
+        mass: &MassData,
+        b: &[f64],
+        x: &mut [f64],
+    ) -> Result<(), SolveError> {
+        diagonal(geo, mass, &mut cg.diag);
+        let b_norm = dot(b, b).sqrt();
+        self.last_iterations = 0;
+        if b_norm == 0.0 {
+            x.fill(0.0);
+            return Ok(());
+        }
+        self.apply(geo, mass, x, &mut cg.ap);
+        for i in 0..b.len() {
+            cg.r[i] = b[i] - cg.ap[i];
+            cg.z[i] = precondition(cg.r[i], cg.diag[i]);
+            cg.p[i] = cg.z[i];
+        }
+        let mut rz = dot(&cg.r, &cg.z);
+        let goal = cg.tolerance * b_norm;
+        for it in 0..cg.max_iterations {
+            if dot(&cg.r, &cg.r).sqrt() <= goal {
+                break;
+            }
+            self.apply(geo, mass, &cg.p, &mut cg.ap);
+            let pap = dot(&cg.p, &cg.ap);
+            if !(pap > 0.0) {
+                break;
+            }
+            let alpha = rz / pap;
+            for i in 0..b.len() {
+                x[i] += alpha * cg.p[i];
+                cg.r[i] -= alpha * cg.ap[i];
+                cg.z[i] = precondition(cg.r[i], cg.diag[i]);
+            }
+            let rz_new = dot(&cg.r, &cg.z);
+            let beta = rz_new / rz;
+            rz = rz_new;
+            for i in 0..b.len() {
+                cg.p[i] = cg.z[i] + beta * cg.p[i];
+            }
+            self.last_iterations = it + 1;
+        }
+        Ok(())
+    }
+
+    /// `y = J M⁻¹ Jᵀ x`, matrix-free.
+    pub fn apply(&mut self, geo: &Geometry, mass: &MassData, x: &[f64], y: &mut [f64]) {
+        self.f.fill(Vector3::zeros());
+        let rigid = !geo.ca.is_empty();
+        for (k, &(a, b)) in geo.ends.iter().enumerate() {
+            let fk = geo.n[k] * x[k];
+            self.f[a] += fk;
+            self.f[b] -= fk;
+        }
+        let im = &mass.inv_mass;
+        for (f, &m) in self.f.iter_mut().zip(im) {
+            *f *= m;
+        }
+        if !rigid {
+            for (k, &(a, b)) in geo.ends.iter().enumerate() {
+                y[k] = geo.n[k].dot(&(self.f[a] - self.f[b]));
+            }
+            return;
+        }
+        self.t.fill(Vector3::zeros());
+        for (k, &(a, b)) in geo.ends.iter().enumerate() {
+            self.t[a] += geo.ca[k] * x[k];
+            self.t[b] -= geo.cb[k] * x[k];
+        }
+        for (t, inv) in self.t.iter_mut().zip(&mass.inv_inertia) {
+            *t = inv * *t;
+        }
+        for (k, &(a, b)) in geo.ends.iter().enumerate() {
+            y[k] = geo.n[k].dot(&(self.f[a] - self.f[b])) + geo.ca[k].dot(&self.t[a])
+                - geo.cb[k].dot(&self.t[b]);
+        }
+    }
+}
+
+fn precondition(r: f64, d: f64) -> f64 {
+    if d > 0.0 {
+        r / d
+    } else {
+        r
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// Diagonal of `A`: `1/m_a + 1/m_b + c_aᵀ I_a⁻¹ c_a + c_bᵀ I_b⁻¹ c_b` per link.
+fn diagonal(geo: &Geometry, mass: &MassData, d: &mut [f64]) {
+    let im = &mass.inv_mass;
+    for (k, &(a, b)) in geo.ends.iter().enumerate() {
+        d[k] = im[a] + im[b];
+    }
+    if !geo.ca.is_empty() {
+        let ii = &mass.inv_inertia;
+        for (k, &(a, b)) in geo.ends.iter().enumerate() {
+            d[k] += geo.ca[k].dot(&(ii[a] * geo.ca[k])) + geo.cb[k].dot(&(ii[b] * geo.cb[k]));
+        }
+    }
+}
+
+impl Exact {
+    fn new(bodies: usize, ends: &[(usize, usize)]) -> Exact {
+        let m = ends.len();
+        // Links incident to each body, in link order (deterministic).
+        let mut incident: Vec<Vec<(usize, Side)>> = vec![Vec::new(); bodies];
+        for (k, &(a, b)) in ends.iter().enumerate() {
+            incident[a].push((k, Side::A));
+            incident[b].push((k, Side::B));
+        }
+        // Pattern: (col, row) pairs, ordered for CSC.
+        let mut slots: BTreeMap<(usize, usize), usize> = BTreeMap::new();
+        for inc in &incident {
+            for &(k, _) in inc {
+                for &(l, _) in inc {
+                    slots.insert((l, k), 0);
+                }
+            }
+        }
+        let mut offsets = vec![0usize; m + 1];
+        let mut indices = Vec::with_capacity(slots.len());
+        for (i, ((col, row), slot)) in slots.iter_mut().enumerate() {
+            *slot = i;
+            offsets[col + 1] = i + 1;
+            indices.push(*row);
+        }
+        for c in 1..=m {
+            offsets[c] = offsets[c].max(offsets[c - 1]);
+        }
+        let n_values = indices.len();
+        // Construction cannot fail: offsets are monotone and rows sorted within a column.
+        let pattern = SparsityPattern::try_from_offsets_and_indices(m, m, offsets, indices)
+            .expect("ok: pattern built sorted and in range");
+        let mut entries = Vec::new();
+        for (body, inc) in incident.iter().enumerate() {
+            for &(k, sk) in inc {
+                for &(l, sl) in inc {
+                    let sign = if sk == sl { 1.0 } else { -1.0 };
+                    entries.push(Entry {
+                        body,
+                        k,
+                        l,
+                        sign,
+                        side_k: sk,
+                        side_l: sl,
+                        value: slots[&(l, k)],
+                    });
+                }
+            }
+        }
+        Exact {
+            pattern,
+            entries,
+            values: vec![0.0; n_values],
+            factor: None,
+            rhs: DVector::zeros(m),
+        }
+    }
+
+    fn solve(
+        &mut self,
+        geo: &Geometry,
+        mass: &MassData,
+        b: &[f64],
+        x: &mut [f64],
+    ) -> Result<(), SolveError> {
+        self.values.fill(0.0);
+        let rigid = !geo.ca.is_empty();
+        let c = |k: usize, side: Side| match side {
+            Side::A => geo.ca[k],
+            Side::B => geo.cb[k],
+        };
+        for e in &self.entries {
+            let mut v = geo.n[e.k].dot(&geo.n[e.l]) * mass.inv_mass[e.body];
+            if rigid {
+                v += c(e.k, e.side_k).dot(&(mass.inv_inertia[e.body] * c(e.l, e.side_l)));
+            }
+            self.values[e.value] += e.sign * v;
+        }
+        let refactored = match &mut self.factor {
+            Some(f) => f.refactor(&self.values).is_ok(),
+            None => {
+                let matrix = CscMatrix::try_from_pattern_and_values(
+                    self.pattern.clone(),
+                    self.values.clone(),
+                )
+                .expect("ok: values match the pattern");
+                match CscCholesky::factor(&matrix) {
+                    Ok(f) => {
+                        self.factor = Some(f);
+                        true
+                    }
+                    Err(_) => false,
+                }
+            }
+        };
+        if !refactored {
+            // A failed numeric refactor leaves the factor unusable; rebuild next time.
+            self.factor = None;
+            return Err(SolveError::NotPositiveDefinite);
+        }
+        let Some(factor) = &self.factor else {
+            return Err(SolveError::NotPositiveDefinite);
+        };
+        self.rhs.as_mut_slice().copy_from_slice(b);
+        factor.solve_mut(&mut self.rhs);
+        x.copy_from_slice(self.rhs.as_slice());
+        if x.iter().all(|v| v.is_finite()) {
+            Ok(())
+        } else {
+            Err(SolveError::NotPositiveDefinite)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::DMatrix;
+
+    /// A small rigid scene with shared bodies and off-centre anchors.
+    fn scene() -> (Geometry, MassData) {
+        let ends = vec![(0, 1), (1, 2), (2, 0), (2, 3)];
+        let n: Vec<Vector3<f64>> = [
+            Vector3::new(1.0, 0.2, 0.0),
+            Vector3::new(0.0, 1.0, 0.3),
+            Vector3::new(-0.5, 0.1, 1.0),
+            Vector3::new(0.3, -1.0, 0.2),
+        ]
+        .iter()
+        .map(|v| v.normalize())
+        .collect();
+        let ca = vec![
+            Vector3::new(0.1, 0.0, 0.02),
+            Vector3::new(0.0, 0.05, 0.0),
+            Vector3::new(0.0, 0.0, 0.1),
+            Vector3::new(0.02, 0.02, 0.0),
+        ];
+        let cb = vec![
+            Vector3::new(0.0, -0.1, 0.0),
+            Vector3::new(0.03, 0.0, 0.01),
+            Vector3::new(0.1, 0.1, 0.0),
+            Vector3::new(0.0, 0.0, -0.05),
+        ];
+        let inv_inertia = (0..4)
+            .map(|i| Matrix3::from_diagonal(&Vector3::new(2.0 + i as f64, 3.0, 4.0)))
+            .collect();
+        (
+            Geometry { ends, n, ca, cb },
+            MassData {
+                inv_mass: vec![1.0, 0.5, 2.0, 1.5],
+                inv_inertia,
+            },
+        )
+    }
+
+    /// Dense `J M⁻¹ Jᵀ` from the definition, for checking.
+    fn dense(geo: &Geometry, mass: &MassData) -> DMatrix<f64> {
+        let m = geo.ends.len();
+        let nb = mass.inv_mass.len();
+        let mut j = DMatrix::zeros(m, 6 * nb);
+        for (k, &(a, b)) in geo.ends.iter().enumerate() {
+            for d in 0..3 {
+                j[(k, 6 * a + d)] += geo.n[k][d];
+                j[(k, 6 * b + d)] -= geo.n[k][d];
+                j[(k, 6 * a + 3 + d)] += geo.ca[k][d];
+                j[(k, 6 * b + 3 + d)] -= geo.cb[k][d];
+            }
+        }
+        let mut minv = DMatrix::zeros(6 * nb, 6 * nb);
+        for i in 0..nb {
+            for d in 0..3 {
+                minv[(6 * i + d, 6 * i + d)] = mass.inv_mass[i];
+            }
+            minv.view_mut((6 * i + 3, 6 * i + 3), (3, 3))
+                .copy_from(&mass.inv_inertia[i]);
+        }
+        &j * minv * j.transpose()
+    }
+
+    #[test]
+    fn matrix_free_product_matches_dense_definition() {
+        let (geo, mass) = scene();
+        let a = dense(&geo, &mass);
+        let x = [0.3, -1.2, 0.7, 2.0];
+        let mut y = [0.0; 4];
+        let mut s = JsSolver::new(Solver::Cholesky, 4, &geo.ends);
+        s.apply(&geo, &mass, &x, &mut y);
+        let want = &a * DVector::from_row_slice(&x);
+        for k in 0..4 {
+            assert!((y[k] - want[k]).abs() < 1e-12, "row {k}: {} vs {}", y[k], want[k]);
+        }
+    }
+
+    #[test]
+    fn exact_and_cg_solve_the_dense_system() {
+        let (geo, mass) = scene();
+        let a = dense(&geo, &mass);
+        let b = [1.0, -2.0, 0.5, 0.25];
+        for kind in [
+            Solver::Cholesky,
+            Solver::ConjugateGradient {
+                max_iterations: 50,
+                tolerance: 1e-14,
+            },
+        ] {
+            let mut s = JsSolver::new(kind, 4, &geo.ends);
+            let mut x = [0.0; 4];
+            s.solve(&geo, &mass, &b, &mut x).unwrap();
+            let r = &a * DVector::from_row_slice(&x) - DVector::from_row_slice(&b);
+            assert!(r.norm() < 1e-10, "{kind:?}: residual {}", r.norm());
+        }
+    }
+
+    #[test]
+    fn exact_solve_reports_a_singular_system() {
+        // Two identical links between the same bodies: A is singular.
+        let geo = Geometry {
+            ends: vec![(0, 1), (0, 1)],
+            n: vec![Vector3::x(), Vector3::x()],
+            ca: vec![],
+            cb: vec![],
+        };
+        let mass = MassData {
+            inv_mass: vec![1.0, 1.0],
+            inv_inertia: vec![],
+        };
+        let mut s = JsSolver::new(Solver::Cholesky, 2, &geo.ends);
+        let mut x = [0.0; 2];
+        assert!(s.solve(&geo, &mass, &[1.0, 0.0], &mut x).is_err());
+    }
+}

@@ -1,0 +1,56 @@
+//! Terminal progress for long runs: an `indicatif` bar on stderr that appears only when
+//! stderr is a terminal and the run has already taken more than [`QUIET_FOR`], so
+//! short runs and scripted runs stay quiet. Reads the wall clock only to decide whether
+//! to draw; nothing here reaches a trace.
+
+use std::time::{Duration, Instant};
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+/// How long a run stays silent before its bar appears.
+pub const QUIET_FOR: Duration = Duration::from_secs(2);
+
+/// A lazily shown progress bar over `total` units.
+pub struct Progress {
+    bar: ProgressBar,
+    started: Instant,
+    shown: bool,
+    enabled: bool,
+}
+
+impl Progress {
+    /// A bar over `total` units (hidden until [`QUIET_FOR`] has passed).
+    pub fn new(total: u64) -> Progress {
+        use std::io::IsTerminal;
+        let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::hidden());
+        bar.set_style(
+            ProgressStyle::with_template("{bar:40} {pos}/{len} steps  {elapsed} elapsed, ETA {eta}")
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        Progress {
+            bar,
+            started: Instant::now(),
+            shown: false,
+            enabled: std::io::stderr().is_terminal(),
+        }
+    }
+
+    /// Sets the position (cheap: only every 1024th call looks at the clock).
+    pub fn tick(&mut self, pos: u64) {
+        if !self.enabled || pos % 1024 != 0 {
+            return;
+        }
+        if !self.shown && self.started.elapsed() > QUIET_FOR {
+            self.bar.set_draw_target(ProgressDrawTarget::stderr());
+            self.shown = true;
+        }
+        self.bar.set_position(pos);
+    }
+
+    /// Clears the bar.
+    pub fn finish(&self) {
+        if self.shown {
+            self.bar.finish_and_clear();
+        }
+    }
+}

@@ -1,0 +1,10 @@
+//! Scenario files: the raw JSON form ([`file`]), the validated form ([`model`]) and the
+//! conversion between them ([`validate`]).
+
+pub mod file;
+pub mod grid;
+pub mod model;
+pub mod validate;
+
+pub use model::Scenario;
+pub use validate::{load, parse_str};

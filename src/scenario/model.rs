@@ -1,0 +1,203 @@
+//! The validated scenario: units applied, defaults filled in, ids resolved to indices.
+//!
+//! Built once from a [`ScenarioFile`](super::file::ScenarioFile) by
+//! [`validate`](super::validate::validate); the simulation is built from this and never
+//! looks at the raw file again.
+
+use nalgebra::{UnitQuaternion, Vector3};
+
+use crate::kernel::SimTime;
+
+/// Time integrator of the `(x, v, z)` state.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Integrator {
+    /// Explicit (forward) Euler over the whole state: every rate at the start of the step
+    /// (the thesis's integrator).
+    Euler,
+    /// Symplectic (semi-implicit) Euler: velocities and multipliers first, then positions
+    /// and orientations with the new velocities.
+    SymplecticEuler,
+    /// Classical fourth-order Runge–Kutta over the whole state.
+    Rk4,
+}
+
+impl Integrator {
+    /// The name used in scenario files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Integrator::Euler => "euler",
+            Integrator::SymplecticEuler => "symplectic_euler",
+            Integrator::Rk4 => "rk4",
+        }
+    }
+}
+
+/// Constraint stabilization method (SPEC section 2).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Stabilizer {
+    /// Sliding-mode control with multipliers `z` in the ODE state.
+    Smc {
+        /// Sliding-surface time constant μ [s].
+        mu: f64,
+        /// Robustness gain K [m/s].
+        k: f64,
+        /// Boundary-layer width ε [m].
+        epsilon: f64,
+    },
+    /// Baumgarte stabilization with exact multipliers:
+    /// `J M⁻¹ Jᵀ z = −J̇v − J M⁻¹ F − 2αẇ − β²w`.
+    Baumgarte {
+        /// Damping coefficient α [1/s].
+        alpha: f64,
+        /// Stiffness coefficient β [1/s].
+        beta: f64,
+    },
+}
+
+/// How the linear system in the multipliers is solved.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Solver {
+    /// Exact sparse Cholesky factorization (symbolic pattern computed once per run).
+    Cholesky,
+    /// Jacobi-preconditioned conjugate gradient, warm-started from the previous solution.
+    ConjugateGradient {
+        /// Iteration budget per solve.
+        max_iterations: usize,
+        /// Stop when the residual norm falls below `tolerance · |rhs|`.
+        tolerance: f64,
+    },
+}
+
+/// Which body model the integrator uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BodyModel {
+    /// Point masses: no orientation or angular velocity in the state. Only valid when
+    /// every link anchor is at a body centre and no body starts spinning.
+    PointMass,
+    /// Full rigid bodies: unit quaternions and Newton–Euler rotation.
+    Rigid,
+}
+
+impl BodyModel {
+    /// The name used in scenario files and summary.json.
+    pub fn name(self) -> &'static str {
+        match self {
+            BodyModel::PointMass => "point_mass",
+            BodyModel::Rigid => "rigid",
+        }
+    }
+}
+
+/// One body, with its initial state.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BodySpec {
+    /// The id used in the scenario file and in trace column names (`px_B<id>`).
+    pub id: u32,
+    /// Mass [kg].
+    pub mass: f64,
+    /// Edge of the cube the body is drawn as [m].
+    pub size: f64,
+    /// Principal moments of inertia in the body frame [kg·m²]
+    /// (cube default `m s²/6` on each axis).
+    pub inertia: Vector3<f64>,
+    /// Initial position of the centre of mass [m].
+    pub position: Vector3<f64>,
+    /// Initial linear velocity [m/s].
+    pub velocity: Vector3<f64>,
+    /// Initial orientation (body frame → world frame).
+    pub orientation: UnitQuaternion<f64>,
+    /// Initial angular velocity in the world frame [rad/s].
+    pub angular_velocity: Vector3<f64>,
+}
+
+/// One rigid distance link.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LinkSpec {
+    /// Index (into [`Scenario::bodies`]) of body `a`.
+    pub a: usize,
+    /// Index of body `b`.
+    pub b: usize,
+    /// Link length L [m].
+    pub length: f64,
+    /// Anchor on body `a`, in the body frame [m].
+    pub anchor_a: Vector3<f64>,
+    /// Anchor on body `b`, in the body frame [m].
+    pub anchor_b: Vector3<f64>,
+}
+
+/// A sinusoidal external force at a body's centre:
+/// `amplitude · sin(omega · t + phase)` for `from ≤ t < until` (absolute time t).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ForceSpec {
+    /// Index of the driven body.
+    pub body: usize,
+    /// Amplitude vector [N].
+    pub amplitude: Vector3<f64>,
+    /// Angular frequency ω [rad/s]; `0` gives the constant force `amplitude · sin(phase)`.
+    pub omega: f64,
+    /// Phase φ [rad].
+    pub phase: f64,
+    /// Switch-on time (inclusive).
+    pub from: SimTime,
+    /// Switch-off time (exclusive); `None` = never.
+    pub until: Option<SimTime>,
+}
+
+impl ForceSpec {
+    /// The force [N] at time `t`.
+    pub fn at(&self, t: SimTime) -> Vector3<f64> {
+        let on = t >= self.from && self.until.is_none_or(|u| t < u);
+        if on {
+            self.amplitude * (self.omega * t.as_secs_f64() + self.phase).sin()
+        } else {
+            Vector3::zeros()
+        }
+    }
+}
+
+/// What a run writes besides summary.json.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OutputSpec {
+    /// Keep every `decimation`-th step in trace.csv (the first and last steps are always
+    /// kept). The digest covers every step regardless.
+    pub decimation: u64,
+    /// Indices of the bodies whose coordinates go into trace.csv.
+    pub trace_bodies: Vec<usize>,
+    /// Indices of the bodies drawn in the body-coordinate plot.
+    pub plot_bodies: Vec<usize>,
+}
+
+/// A validated scenario.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scenario {
+    /// Scenario name (copied into summary.json).
+    pub name: String,
+    /// Seed of every random stream of the run.
+    pub seed: u64,
+    /// Simulated duration.
+    pub duration: SimTime,
+    /// Integration step.
+    pub dt: SimTime,
+    /// Number of steps: `duration / dt` (exact).
+    pub steps: u64,
+    /// Time integrator.
+    pub integrator: Integrator,
+    /// Constraint stabilizer.
+    pub stabilizer: Stabilizer,
+    /// Multiplier solve.
+    pub solver: Solver,
+    /// Body model actually used (after resolving `auto`).
+    pub body_model: BodyModel,
+    /// Bodies, in file order (grid: row by row).
+    pub bodies: Vec<BodySpec>,
+    /// Links, in file order (link k of the file is `links[k-1]`).
+    pub links: Vec<LinkSpec>,
+    /// External forces.
+    pub forces: Vec<ForceSpec>,
+    /// A run stops with a divergence error when any `|w|` exceeds this [m].
+    pub max_violation: f64,
+    /// Length T of a cost measurement window.
+    pub measurement_period: SimTime,
+    /// Output options.
+    pub output: OutputSpec,
+}

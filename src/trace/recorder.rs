@@ -1,0 +1,204 @@
+//! Per-step recording: digest of every step, decimated rows of `trace.csv`, and the few
+//! series the plots need (kept in memory; the full trace is streamed to disk).
+
+use std::io::Write;
+
+use crate::kernel::SimTime;
+use crate::multibody::State;
+use crate::output::AtomicFile;
+use crate::report::Series;
+
+use super::Digest;
+
+/// At most this many links get their own series in the constraint plot; larger models
+/// plot the envelope `max_l |w_l|` only.
+pub const MAX_PLOTTED_LINKS: usize = 24;
+
+/// Records a run's steps.
+pub struct Recorder {
+    decimation: u64,
+    link_count: usize,
+    trace_bodies: Vec<usize>,
+    plot_bodies: Vec<(usize, u32)>,
+    file: Option<AtomicFile>,
+    line: String,
+    digest: Digest,
+    max_violation: f64,
+    rows: u64,
+    times: Vec<f64>,
+    link_series: Vec<Vec<f64>>,
+    envelope: Vec<f64>,
+    body_series: Vec<[Vec<f64>; 3]>,
+}
+
+/// The values of one step, as the recorder needs them.
+pub struct StepValues<'a> {
+    /// Step index k (t = k dt).
+    pub step: u64,
+    /// Time of the step.
+    pub time: SimTime,
+    /// Whether this is the last step of the run (always written).
+    pub last: bool,
+    /// Constraint values w per link [m].
+    pub w: &'a [f64],
+    /// Link tensions f per link [N].
+    pub f: &'a [f64],
+    /// The state at `time`.
+    pub state: &'a State,
+}
+
+impl Recorder {
+    /// A recorder writing `trace.csv` to `file` (or only digesting, if `None`).
+    /// `body_ids[i]` is the file id of body index `i`.
+    pub fn new(
+        file: Option<AtomicFile>,
+        decimation: u64,
+        link_count: usize,
+        body_ids: &[u32],
+        trace_bodies: &[usize],
+        plot_bodies: &[usize],
+    ) -> std::io::Result<Recorder> {
+        let mut r = Recorder {
+            decimation: decimation.max(1),
+            link_count,
+            trace_bodies: trace_bodies.to_vec(),
+            plot_bodies: plot_bodies.iter().map(|&i| (i, body_ids[i])).collect(),
+            file,
+            line: String::new(),
+            digest: Digest::new(),
+            max_violation: 0.0,
+            rows: 0,
+            times: Vec::new(),
+            link_series: vec![Vec::new(); link_count.min(MAX_PLOTTED_LINKS + 1)],
+            envelope: Vec::new(),
+            body_series: vec![Default::default(); plot_bodies.len()],
+        };
+        if link_count > MAX_PLOTTED_LINKS {
+            r.link_series.clear();
+        }
+        if let Some(f) = &mut r.file {
+            let mut head = String::from("t");
+            for k in 1..=link_count {
+                head.push_str(&format!(",w_L{k}"));
+            }
+            for k in 1..=link_count {
+                head.push_str(&format!(",f_L{k}"));
+            }
+            for &i in trace_bodies {
+                let id = body_ids[i];
+                for ax in ["px", "py", "pz", "vx", "vy", "vz"] {
+                    head.push_str(&format!(",{ax}_B{id}"));
+                }
+            }
+            writeln!(f, "{head}")?;
+        }
+        Ok(r)
+    }
+
+    /// Records one step: digest always, CSV row and plot samples when the step is kept.
+    pub fn record(&mut self, s: &StepValues) -> std::io::Result<()> {
+        self.digest.time(s.time.as_nanos());
+        self.digest.values(s.w);
+        self.digest.values(s.f);
+        for p in &s.state.p {
+            self.digest.values(p.as_slice());
+        }
+        for v in &s.state.v {
+            self.digest.values(v.as_slice());
+        }
+        for &w in s.w {
+            self.max_violation = self.max_violation.max(w.abs());
+        }
+        if s.step % self.decimation != 0 && !s.last {
+            return Ok(());
+        }
+        self.rows += 1;
+        let t = s.time.as_secs_f64();
+        self.times.push(t);
+        for (series, &w) in self.link_series.iter_mut().zip(s.w) {
+            series.push(w);
+        }
+        self.envelope.push(s.w.iter().fold(0.0, |m: f64, w| m.max(w.abs())));
+        for (series, &(i, _)) in self.body_series.iter_mut().zip(&self.plot_bodies) {
+            for (ax, series) in series.iter_mut().enumerate() {
+                series.push(s.state.p[i][ax]);
+            }
+        }
+        let Some(file) = &mut self.file else {
+            return Ok(());
+        };
+        use std::fmt::Write as _;
+        self.line.clear();
+        let _ = write!(self.line, "{t}");
+        for x in s.w.iter().chain(s.f) {
+            let _ = write!(self.line, ",{x}");
+        }
+        for &i in &self.trace_bodies {
+            let (p, v) = (s.state.p[i], s.state.v[i]);
+            for x in p.iter().chain(v.iter()) {
+                let _ = write!(self.line, ",{x}");
+            }
+        }
+        self.line.push('\n');
+        file.write_all(self.line.as_bytes())
+    }
+
+    /// The digest so far (hex).
+    pub fn digest(&self) -> String {
+        self.digest.hex()
+    }
+
+    /// Largest `|w|` recorded so far [m].
+    pub fn max_violation(&self) -> f64 {
+        self.max_violation
+    }
+
+    /// Rows written to the trace.
+    pub fn rows(&self) -> u64 {
+        self.rows
+    }
+
+    /// Closes the trace file (renaming it into place).
+    pub fn commit(&mut self) -> crate::Result<()> {
+        match self.file.take() {
+            Some(f) => f.commit(),
+            None => Ok(()),
+        }
+    }
+
+    /// Series for the constraint plot: one per link (small models) or the envelope.
+    pub fn constraint_series(&self) -> Vec<Series> {
+        if self.link_series.is_empty() {
+            return vec![Series {
+                label: format!("max over {} links of |w|", self.link_count),
+                points: zip(&self.times, &self.envelope),
+            }];
+        }
+        self.link_series
+            .iter()
+            .enumerate()
+            .map(|(k, s)| Series {
+                label: format!("L{}", k + 1),
+                points: zip(&self.times, s),
+            })
+            .collect()
+    }
+
+    /// Series for the body-coordinate plot: x, y, z of each plotted body.
+    pub fn body_series(&self) -> Vec<Series> {
+        let mut out = Vec::new();
+        for (series, &(_, id)) in self.body_series.iter().zip(&self.plot_bodies) {
+            for (ax, s) in ["x", "y", "z"].iter().zip(series) {
+                out.push(Series {
+                    label: format!("{ax} of B{id}"),
+                    points: zip(&self.times, s),
+                });
+            }
+        }
+        out
+    }
+}
+
+fn zip(t: &[f64], y: &[f64]) -> Vec<(f64, f64)> {
+    t.iter().copied().zip(y.iter().copied()).collect()
+}
