@@ -89,7 +89,9 @@ impl System {
             return;
         }
         for i in 0..state.q.len() {
-            let r = *UnitQuaternion::new_normalize(state.q[i]).to_rotation_matrix().matrix();
+            let r = *UnitQuaternion::new_normalize(state.q[i])
+                .to_rotation_matrix()
+                .matrix();
             let d = self.inertia[i];
             let inv = if self.mass.inv_mass[i] == 0.0 {
                 Vector3::zeros()
@@ -174,7 +176,8 @@ impl System {
         for (l, &(a, b)) in self.geo.ends.iter().enumerate() {
             let mut wdd = self.geo.n[l].dot(&(self.ws.acc[a] - self.ws.acc[b])) + self.ws.jdv[l];
             if self.rigid {
-                wdd += self.geo.ca[l].dot(&self.ws.alpha[a]) - self.geo.cb[l].dot(&self.ws.alpha[b]);
+                wdd +=
+                    self.geo.ca[l].dot(&self.ws.alpha[a]) - self.geo.cb[l].dot(&self.ws.alpha[b]);
             }
             self.ws.wdd[l] = wdd;
         }

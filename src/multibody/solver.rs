@@ -178,8 +178,8 @@ impl JsSolver {
             return Ok(());
         }
         self.apply(geo, mass, x, &mut cg.ap);
-        for i in 0..b.len() {
-            cg.r[i] = b[i] - cg.ap[i];
+        for (i, &bi) in b.iter().enumerate() {
+            cg.r[i] = bi - cg.ap[i];
             cg.z[i] = precondition(cg.r[i], cg.diag[i]);
             cg.p[i] = cg.z[i];
         }
@@ -191,20 +191,22 @@ impl JsSolver {
             }
             self.apply(geo, mass, &cg.p, &mut cg.ap);
             let pap = dot(&cg.p, &cg.ap);
-            if !(pap > 0.0) {
+            // A non-positive (or NaN) curvature means A is singular along p: stop
+            // with the best iterate so far and let the robustness term absorb it.
+            if pap.is_nan() || pap <= 0.0 {
                 break;
             }
             let alpha = rz / pap;
-            for i in 0..b.len() {
-                x[i] += alpha * cg.p[i];
+            for (i, xi) in x.iter_mut().enumerate() {
+                *xi += alpha * cg.p[i];
                 cg.r[i] -= alpha * cg.ap[i];
                 cg.z[i] = precondition(cg.r[i], cg.diag[i]);
             }
             let rz_new = dot(&cg.r, &cg.z);
             let beta = rz_new / rz;
             rz = rz_new;
-            for i in 0..b.len() {
-                cg.p[i] = cg.z[i] + beta * cg.p[i];
+            for (p, z) in cg.p.iter_mut().zip(&cg.z) {
+                *p = z + beta * *p;
             }
             self.last_iterations = it + 1;
         }
@@ -430,7 +432,7 @@ mod tests {
     fn dense(geo: &Geometry, mass: &MassData) -> DMatrix<f64> {
         let m = geo.ends.len();
         let nb = mass.inv_mass.len();
-        let mut j = DMatrix::zeros(m, 6 * nb);
+        let mut j = DMatrix::<f64>::zeros(m, 6 * nb);
         for (k, &(a, b)) in geo.ends.iter().enumerate() {
             for d in 0..3 {
                 j[(k, 6 * a + d)] += geo.n[k][d];
@@ -439,7 +441,7 @@ mod tests {
                 j[(k, 6 * b + 3 + d)] -= geo.cb[k][d];
             }
         }
-        let mut minv = DMatrix::zeros(6 * nb, 6 * nb);
+        let mut minv = DMatrix::<f64>::zeros(6 * nb, 6 * nb);
         for i in 0..nb {
             for d in 0..3 {
                 minv[(6 * i + d, 6 * i + d)] = mass.inv_mass[i];
@@ -460,7 +462,12 @@ mod tests {
         s.apply(&geo, &mass, &x, &mut y);
         let want = &a * DVector::from_row_slice(&x);
         for k in 0..4 {
-            assert!((y[k] - want[k]).abs() < 1e-12, "row {k}: {} vs {}", y[k], want[k]);
+            assert!(
+                (y[k] - want[k]).abs() < 1e-12,
+                "row {k}: {} vs {}",
+                y[k],
+                want[k]
+            );
         }
     }
 

@@ -123,8 +123,15 @@ impl State {
 
     /// Whether every value of the state is finite.
     pub fn is_finite(&self) -> bool {
-        self.p.iter().chain(&self.v).chain(&self.omega).all(|x| x.iter().all(|c| c.is_finite()))
-            && self.q.iter().all(|q| q.coords.iter().all(|c| c.is_finite()))
+        self.p
+            .iter()
+            .chain(&self.v)
+            .chain(&self.omega)
+            .all(|x| x.iter().all(|c| c.is_finite()))
+            && self
+                .q
+                .iter()
+                .all(|q| q.coords.iter().all(|c| c.is_finite()))
             && self.z.iter().all(|z| z.is_finite())
     }
 }

@@ -7,7 +7,6 @@ use super::state::Rates;
 use crate::kernel::SimTime;
 use crate::scenario::model::{BodyModel, ForceSpec, Integrator, Scenario, Stabilizer};
 
-
 /// One distance link, with body indices resolved.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Link {

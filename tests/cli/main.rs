@@ -1,0 +1,269 @@
+//! The `dsmcosim` binary as a user meets it: exit codes, what is (not) written, messages.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use serde_json::{json, Value};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_dsmcosim"))
+}
+
+fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A fresh scratch directory under the target dir (removed first if present).
+fn scratch(name: &str) -> PathBuf {
+    let d = repo().join("target").join("test-scratch").join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("scratch dir");
+    d
+}
+
+fn write_json(dir: &Path, name: &str, v: &Value) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, serde_json::to_string_pretty(v).expect("json")).expect("write");
+    p
+}
+
+fn run(args: &[&str]) -> Output {
+    bin().args(args).output().expect("spawn dsmcosim")
+}
+
+fn short_grid() -> Value {
+    json!({
+        "name": "short_grid", "seed": 7, "duration": 2.0, "dt": 0.001,
+        "model": {"grid": {"rows": 4, "cols": 4, "spacing": 1.8, "mass": 1.0, "size": 0.2}},
+        "forces": [{"body": 1, "amplitude": [0, 0, 20], "omega": 2.0, "phase": 0.0, "from": 0.0, "until": 12.0}],
+        "output": {"decimation": 20}
+    })
+}
+
+fn summary(dir: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).expect("summary"))
+        .expect("summary is JSON")
+}
+
+#[test]
+fn shipped_scenarios_validate() {
+    for entry in std::fs::read_dir(repo().join("scenarios")).expect("scenarios/") {
+        let p = entry.expect("entry").path();
+        if p.extension().is_some_and(|e| e == "json") {
+            let out = run(&["validate", p.to_str().expect("utf-8 path")]);
+            assert!(
+                out.status.success(),
+                "{}: {}",
+                p.display(),
+                String::from_utf8_lossy(&out.stderr)
+            );
+        }
+    }
+}
+
+#[test]
+fn run_writes_the_output_contract_and_is_deterministic() {
+    let dir = scratch("contract");
+    let scen = write_json(&dir, "s.json", &short_grid());
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    for out in [&a, &b] {
+        let o = run(&[
+            "run",
+            scen.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        assert!(o.stderr.is_empty(), "a short run is quiet on stderr");
+    }
+    let (sa, sb) = (summary(&a), summary(&b));
+    assert_eq!(
+        sa["digest"], sb["digest"],
+        "same scenario and seed, same digest"
+    );
+    assert_eq!(sa["steps"], json!(2000));
+    assert_eq!(sa["body_model"], json!("point_mass"));
+    assert_eq!(
+        std::fs::read(a.join("trace.csv")).unwrap(),
+        std::fs::read(b.join("trace.csv")).unwrap()
+    );
+    // SPEC section 8, checked by the shared contract checker.
+    let checker = repo().join("../shared/contract-check");
+    let o = Command::new("python3")
+        .arg(&checker)
+        .arg(&a)
+        .output()
+        .expect("python3 runs ../shared/contract-check");
+    assert!(
+        o.status.success(),
+        "contract-check: {}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    // Trace columns: t, w_L1..w_L24, f_L1..f_L24, 6 per body.
+    let trace = std::fs::read_to_string(a.join("trace.csv")).unwrap();
+    let head: Vec<&str> = trace.lines().next().unwrap().split(',').collect();
+    assert_eq!(head.len(), 1 + 24 + 24 + 16 * 6);
+    assert_eq!(head[1], "w_L1");
+    assert_eq!(head[25], "f_L1");
+    assert_eq!(
+        &head[49..55],
+        &["px_B1", "py_B1", "pz_B1", "vx_B1", "vy_B1", "vz_B1"]
+    );
+    // 2000 steps, every 20th plus the last: rows at 0, 0.02, …, 2.0.
+    assert_eq!(trace.lines().count(), 1 + 101);
+    // No temporary files are left behind.
+    for e in std::fs::read_dir(&a).unwrap() {
+        let name = e.unwrap().file_name().into_string().unwrap();
+        assert!(!name.starts_with('.'), "leftover {name}");
+    }
+}
+
+#[test]
+fn decimation_and_traced_bodies_do_not_change_the_digest() {
+    let dir = scratch("decimation");
+    let mut v = short_grid();
+    let a = write_json(&dir, "a.json", &v);
+    v["output"] = json!({"decimation": 7, "trace_bodies": [1, 16]});
+    let b = write_json(&dir, "b.json", &v);
+    for (s, o) in [(&a, "ra"), (&b, "rb")] {
+        let out = run(&[
+            "run",
+            s.to_str().unwrap(),
+            "--out",
+            dir.join(o).to_str().unwrap(),
+        ]);
+        assert!(out.status.success());
+    }
+    assert_eq!(
+        summary(&dir.join("ra"))["digest"],
+        summary(&dir.join("rb"))["digest"]
+    );
+}
+
+#[test]
+fn bad_input_exits_2_names_the_field_and_writes_nothing() {
+    let dir = scratch("bad");
+    let cases: Vec<(Value, &str)> = vec![
+        (
+            {
+                let mut v = short_grid();
+                v["dt"] = json!(-0.001);
+                v
+            },
+            "dt",
+        ),
+        (
+            {
+                let mut v = short_grid();
+                v["forces"][0]["until"] = json!(-1.0);
+                v
+            },
+            "forces[0]",
+        ),
+        (
+            {
+                let mut v = short_grid();
+                v["forces"][0]["body"] = json!(99);
+                v
+            },
+            "forces[0].body",
+        ),
+        (
+            {
+                let mut v = short_grid();
+                v["colour"] = json!("red");
+                v
+            },
+            "colour",
+        ),
+        (
+            {
+                let mut v = short_grid();
+                v["stabilizer"] = json!({"kind": "smc", "mu": 0.0});
+                v
+            },
+            "stabilizer.mu",
+        ),
+    ];
+    for (i, (v, field)) in cases.iter().enumerate() {
+        let scen = write_json(&dir, &format!("bad{i}.json"), v);
+        let out_dir = dir.join(format!("out{i}"));
+        let o = run(&[
+            "run",
+            scen.to_str().unwrap(),
+            "--out",
+            out_dir.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "case {i}: {err}");
+        assert!(
+            err.contains(field),
+            "case {i}: message {err:?} must name {field}"
+        );
+        assert_eq!(
+            err.trim_end().lines().count(),
+            1,
+            "case {i}: one line: {err:?}"
+        );
+        assert!(!out_dir.exists(), "case {i}: nothing may be written");
+    }
+    // Malformed JSON: line and column.
+    let p = dir.join("broken.json");
+    std::fs::write(&p, "{\n  \"name\": \"x\",\n  \"seed\": 1,,\n}").unwrap();
+    let o = run(&["validate", p.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(err.contains("line 3"), "{err}");
+    assert!(err.contains("column"), "{err}");
+    // A missing file is an I/O error, not a panic.
+    let o = run(&["validate", dir.join("nope.json").to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+}
+
+#[test]
+fn divergence_exits_3_names_time_node_and_link_and_keeps_the_trace() {
+    let dir = scratch("diverge");
+    // Explicit Euler with SMC at dt = 40 ms is far past its stability limit
+    // (the boundary-layer rate K/ε = 100 /s needs dt < 20 ms).
+    let mut v = short_grid();
+    v["dt"] = json!(0.04);
+    v["duration"] = json!(20.0);
+    let scen = write_json(&dir, "s.json", &v);
+    let out = dir.join("out");
+    let o = run(&[
+        "run",
+        scen.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{err}");
+    assert!(err.contains("diverged at t = "), "{err}");
+    assert!(err.contains("node 0"), "{err}");
+    assert!(err.contains("link L"), "{err}");
+    let s = summary(&out);
+    assert_eq!(s["status"], json!("diverged"));
+    let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    assert!(
+        trace.lines().count() > 2,
+        "the trace up to the divergence is kept"
+    );
+    assert!(
+        !trace.contains("NaN") && !trace.contains("inf"),
+        "no non-finite value in the trace"
+    );
+}
+
+#[test]
+fn every_subcommand_has_help() {
+    for args in [
+        vec!["--help"],
+        vec!["run", "--help"],
+        vec!["validate", "--help"],
+    ] {
+        let o = run(&args);
+        assert!(o.status.success(), "{args:?}");
+        assert!(String::from_utf8_lossy(&o.stdout).contains("Usage"));
+    }
+}
