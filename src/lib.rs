@@ -22,6 +22,9 @@
 //! reaches a trace depends on hash-map order or the wall clock.
 
 #![warn(missing_docs)]
+// Physical fields carry their unit in brackets (`[s]`, `[m]`); rustdoc would read those
+// as links.
+#![allow(rustdoc::broken_intra_doc_links)]
 
 pub mod cli;
 pub mod control;

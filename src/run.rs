@@ -57,7 +57,11 @@ pub fn run(scenario: &Scenario, out: &Path) -> Result<Outcome> {
         &scenario.output.plot_bodies,
     )
     .map_err(|e| Error::io(&trace_path, e))?;
-    let mut meter = CostMeter::new(scenario.links.len(), scenario.dt, scenario.measurement_period);
+    let mut meter = CostMeter::new(
+        scenario.links.len(),
+        scenario.dt,
+        scenario.measurement_period,
+    );
     let started = Instant::now();
     let result = simulate(scenario, &mut recorder, &mut meter, &trace_path);
     let wall_seconds = started.elapsed().as_secs_f64();
@@ -95,7 +99,9 @@ fn simulate(
     for k in 0..=scenario.steps {
         let t = SimTime(k * scenario.dt.0);
         let fail = |e| (k, e);
-        system.begin_step(t, &state).map_err(|e| fail(eval_error(t, e, scenario)))?;
+        system
+            .begin_step(t, &state)
+            .map_err(|e| fail(eval_error(t, e, scenario)))?;
         check(t, &system, &state, scenario).map_err(fail)?;
         for (l, f) in f.iter_mut().enumerate() {
             *f = system.tension(&state, l);
@@ -150,7 +156,12 @@ fn check(t: SimTime, system: &System, state: &State, scenario: &Scenario) -> Res
     }
     if !state.is_finite() {
         let i = (0..state.bodies())
-            .find(|&i| !(state.p[i].iter().chain(state.v[i].iter()).all(|x| x.is_finite())))
+            .find(|&i| {
+                !(state.p[i]
+                    .iter()
+                    .chain(state.v[i].iter())
+                    .all(|x| x.is_finite()))
+            })
             .unwrap_or(0);
         return diverged(
             Place::Body(scenario.bodies[i].id),
@@ -203,7 +214,9 @@ fn write_summary(
     error: Option<&str>,
 ) -> Result<()> {
     let stabilizer = match scenario.stabilizer {
-        Stabilizer::Smc { mu, k, epsilon } => json!({"kind": "smc", "mu": mu, "k": k, "epsilon": epsilon}),
+        Stabilizer::Smc { mu, k, epsilon } => {
+            json!({"kind": "smc", "mu": mu, "k": k, "epsilon": epsilon})
+        }
         Stabilizer::Baumgarte { alpha, beta } => {
             json!({"kind": "baumgarte", "alpha": alpha, "beta": beta})
         }

@@ -1,5 +1,5 @@
-//! Scenario files: the raw JSON form ([`file`]), the validated form ([`model`]) and the
-//! conversion between them ([`validate`]).
+//! Scenario files: the raw JSON form ([`file`](mod@file)), the validated form
+//! ([`model`]) and the conversion between them ([`validate`]).
 
 pub mod file;
 pub mod grid;

@@ -124,7 +124,10 @@ mod tests {
         let mut m = CostMeter::new(1, dt, SimTime(1_000_000_000));
         for k in 0..10_000u64 {
             let t = k as f64 * 1e-4;
-            m.add(SimTime(k * dt.0), &[0.5 * (2.0 * std::f64::consts::PI * t).sin()]);
+            m.add(
+                SimTime(k * dt.0),
+                &[0.5 * (2.0 * std::f64::consts::PI * t).sin()],
+            );
         }
         assert!((m.epochs()[0].cost - 0.5 / 2f64.sqrt()).abs() < 1e-9);
     }

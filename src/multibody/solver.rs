@@ -273,7 +273,20 @@ fn diagonal(geo: &Geometry, mass: &MassData, d: &mut [f64]) {
     }
 }
 
+/// A squared Cholesky pivot below this fraction of the largest diagonal entry of `A`
+/// counts as singular (about 100× the f64 round-off of an elimination step).
+const SINGULAR_PIVOT: f64 = 1e-13;
+
 impl Exact {
+    /// Largest diagonal entry of the assembled `A`.
+    fn max_diagonal(&self) -> f64 {
+        let (offsets, rows) = (self.pattern.major_offsets(), self.pattern.minor_indices());
+        (0..offsets.len() - 1)
+            .flat_map(|c| (offsets[c]..offsets[c + 1]).filter(move |&i| rows[i] == c))
+            .map(|i| self.values[i])
+            .fold(0.0, f64::max)
+    }
+
     fn new(bodies: usize, ends: &[(usize, usize)]) -> Exact {
         let m = ends.len();
         // Links incident to each body, in link order (deterministic).
@@ -376,6 +389,17 @@ impl Exact {
         let Some(factor) = &self.factor else {
             return Err(SolveError::NotPositiveDefinite);
         };
+        // A pivot that is round-off relative to the largest diagonal entry means A is
+        // singular to working precision (e.g. two links doing the same job): report it
+        // instead of returning a solution scaled by 1/round-off.
+        let l = factor.l();
+        let (offsets, values) = (l.col_offsets(), l.values());
+        let min_pivot_sq = (0..l.ncols())
+            .map(|c| values[offsets[c]] * values[offsets[c]])
+            .fold(f64::INFINITY, f64::min);
+        if min_pivot_sq.is_nan() || min_pivot_sq <= SINGULAR_PIVOT * self.max_diagonal() {
+            return Err(SolveError::NotPositiveDefinite);
+        }
         self.rhs.as_mut_slice().copy_from_slice(b);
         factor.solve_mut(&mut self.rhs);
         x.copy_from_slice(self.rhs.as_slice());

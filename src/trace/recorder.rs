@@ -118,7 +118,8 @@ impl Recorder {
         for (series, &w) in self.link_series.iter_mut().zip(s.w) {
             series.push(w);
         }
-        self.envelope.push(s.w.iter().fold(0.0, |m: f64, w| m.max(w.abs())));
+        self.envelope
+            .push(s.w.iter().fold(0.0, |m: f64, w| m.max(w.abs())));
         for (series, &(i, _)) in self.body_series.iter_mut().zip(&self.plot_bodies) {
             for (ax, series) in series.iter_mut().enumerate() {
                 series.push(s.state.p[i][ax]);

@@ -1,0 +1,302 @@
+//! Atomic file output: every file a run writes appears whole or not at all.
+//!
+//! Bytes go to a temporary file beside the target (`.<name>.tmp.<pid>.<n>`, same
+//! directory so the final `rename` never crosses a file system), are flushed and
+//! `sync_all`ed, and only then renamed over the target. A crash or an error leaves at
+//! most a hidden temporary file, never a half-written `summary.json` or `trace.csv`;
+//! on an error we return, the temporary file is removed too.
+//!
+//! I/O errors name the target path (not the temporary one), since that is the file the
+//! user asked for.
+
+use std::fs::{File, OpenOptions};
+use std::io::{self, BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use crate::error::{Error, Result};
+
+/// Writes `bytes` to `path` atomically: the file either keeps its old content (or stays
+/// absent) or has exactly `bytes`, never a mix.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let mut file = AtomicFile::create(path)?;
+    file.write_all(bytes).map_err(|e| Error::io(path, e))?;
+    file.commit()
+}
+
+/// Creates `path` and its missing parents, like [`std::fs::create_dir_all`], with the
+/// path in the error.
+pub fn create_dir_all(path: &Path) -> Result<()> {
+    std::fs::create_dir_all(path).map_err(|e| Error::io(path, e))
+}
+
+/// A buffered file that appears at its path only when [`AtomicFile::commit`] succeeds.
+///
+/// For large streamed outputs such as `trace.csv`. Dropping it without a commit (an
+/// error path, a panic unwinding) removes the temporary file and leaves the target
+/// untouched.
+#[derive(Debug)]
+pub struct AtomicFile {
+    /// The file the caller wants.
+    path: PathBuf,
+    /// The temporary file the bytes go to until the commit.
+    tmp: PathBuf,
+    /// `None` only while committing or dropping.
+    writer: Option<BufWriter<File>>,
+    /// True until the rename succeeded: the temporary file is ours to remove.
+    armed: bool,
+}
+
+/// Distinguishes several temporary files for the same target within one process.
+static TMP_COUNTER: AtomicU64 = AtomicU64::new(0);
+
+/// The temporary path beside `path`: `.<name>.tmp.<pid>.<n>`.
+fn tmp_path(path: &Path) -> Result<PathBuf> {
+    let name = path.file_name().ok_or_else(|| {
+        Error::io(
+            path,
+            io::Error::new(io::ErrorKind::InvalidInput, "not a file name"),
+        )
+    })?;
+    let n = TMP_COUNTER.fetch_add(1, Ordering::Relaxed);
+    let mut tmp_name = std::ffi::OsString::from(".");
+    tmp_name.push(name);
+    tmp_name.push(format!(".tmp.{}.{}", std::process::id(), n));
+    Ok(path.with_file_name(tmp_name))
+}
+
+impl AtomicFile {
+    /// Opens the temporary file beside `path` (the directory must exist).
+    pub fn create(path: &Path) -> Result<AtomicFile> {
+        let tmp = tmp_path(path)?;
+        let file = OpenOptions::new()
+            .write(true)
+            .create(true)
+            .truncate(true)
+            .open(&tmp)
+            .map_err(|e| Error::io(path, e))?;
+        Ok(AtomicFile {
+            path: path.to_path_buf(),
+            tmp,
+            writer: Some(BufWriter::with_capacity(1 << 16, file)),
+            armed: true,
+        })
+    }
+
+    /// The path the file will have once committed.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Flushes, syncs and renames the temporary file over the target. On an error the
+    /// temporary file is removed and the target keeps its old content.
+    pub fn commit(mut self) -> Result<()> {
+        let path = self.path.clone();
+        let writer = self
+            .writer
+            .take()
+            .ok_or_else(|| Error::io(&path, io::Error::other("atomic file already committed")))?;
+        // `into_inner` flushes the buffer; on failure `self` drops and removes `tmp`.
+        let file = writer
+            .into_inner()
+            .map_err(|e| Error::io(&path, e.into_error()))?;
+        file.sync_all().map_err(|e| Error::io(&path, e))?;
+        drop(file);
+        std::fs::rename(&self.tmp, &path).map_err(|e| Error::io(&path, e))?;
+        self.armed = false;
+        sync_parent_dir(&path);
+        Ok(())
+    }
+}
+
+/// Makes the rename durable by syncing the directory entry (Unix only).
+///
+/// Best effort: the rename has already happened, so the file is complete whatever this
+/// returns, and some file systems refuse to sync a directory; failing the run for that
+/// would be worse than the small durability window it closes.
+fn sync_parent_dir(path: &Path) {
+    #[cfg(unix)]
+    {
+        let dir = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        if let Ok(d) = File::open(dir) {
+            let _ = d.sync_all();
+        }
+    }
+    #[cfg(not(unix))]
+    let _ = path;
+}
+
+impl Write for AtomicFile {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        match &mut self.writer {
+            Some(w) => w.write(buf),
+            None => Err(io::Error::other("atomic file already committed")),
+        }
+    }
+
+    fn write_all(&mut self, buf: &[u8]) -> io::Result<()> {
+        match &mut self.writer {
+            Some(w) => w.write_all(buf),
+            None => Err(io::Error::other("atomic file already committed")),
+        }
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        match &mut self.writer {
+            Some(w) => w.flush(),
+            None => Ok(()),
+        }
+    }
+}
+
+impl Drop for AtomicFile {
+    fn drop(&mut self) {
+        if let Some(w) = self.writer.take() {
+            // Discard the buffer without writing it: the file is going away.
+            let (file, _unwritten) = w.into_parts();
+            drop(file);
+        }
+        if self.armed {
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A fresh empty directory under the system temp dir, unique per test and process.
+    fn scratch_dir(test: &str) -> PathBuf {
+        let dir =
+            std::env::temp_dir().join(format!("dsmcosim-output-{}-{}", test, std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    fn entries(dir: &Path) -> Vec<String> {
+        let mut names: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    }
+
+    #[test]
+    fn write_then_read_back() {
+        let dir = scratch_dir("roundtrip");
+        let path = dir.join("summary.json");
+        write_atomic(&path, b"{\"steps\": 3}\n").unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), b"{\"steps\": 3}\n");
+        assert_eq!(entries(&dir), vec!["summary.json".to_string()]);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn streamed_file_commits() {
+        let dir = scratch_dir("stream");
+        let path = dir.join("trace.csv");
+        let mut f = AtomicFile::create(&path).unwrap();
+        assert_eq!(f.path(), path.as_path());
+        writeln!(f, "t,w_L1").unwrap();
+        for k in 0..10_000 {
+            writeln!(f, "{k},0.0").unwrap();
+        }
+        assert!(!path.exists(), "target must not appear before the commit");
+        f.commit().unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert_eq!(text.lines().count(), 10_001);
+        assert_eq!(entries(&dir), vec!["trace.csv".to_string()]);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn dropped_file_leaves_nothing() {
+        let dir = scratch_dir("drop");
+        let path = dir.join("trace.csv");
+        {
+            let mut f = AtomicFile::create(&path).unwrap();
+            f.write_all(&[b'x'; 100_000]).unwrap();
+            assert_eq!(
+                entries(&dir).len(),
+                1,
+                "the temporary file exists while open"
+            );
+        }
+        assert!(!path.exists());
+        assert!(entries(&dir).is_empty(), "left: {:?}", entries(&dir));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn dropped_file_keeps_old_content() {
+        let dir = scratch_dir("drop-old");
+        let path = dir.join("a.txt");
+        write_atomic(&path, b"old").unwrap();
+        {
+            let mut f = AtomicFile::create(&path).unwrap();
+            f.write_all(b"new new new").unwrap();
+        }
+        assert_eq!(std::fs::read(&path).unwrap(), b"old");
+        assert_eq!(entries(&dir), vec!["a.txt".to_string()]);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn overwrite_replaces_completely() {
+        let dir = scratch_dir("overwrite");
+        let path = dir.join("a.txt");
+        write_atomic(&path, &[b'a'; 4096]).unwrap();
+        write_atomic(&path, b"short").unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), b"short");
+        assert_eq!(entries(&dir), vec!["a.txt".to_string()]);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn missing_directory_names_the_path() {
+        let dir = scratch_dir("missing");
+        let path = dir.join("no-such-dir").join("summary.json");
+        match write_atomic(&path, b"x") {
+            Err(Error::Io { path: p, source }) => {
+                assert_eq!(p, path);
+                assert_eq!(source.kind(), io::ErrorKind::NotFound);
+            }
+            other => panic!("expected an Io error, got {other:?}"),
+        }
+        let msg = write_atomic(&path, b"x").unwrap_err().to_string();
+        assert!(msg.contains("no-such-dir"), "message: {msg}");
+        assert!(entries(&dir).is_empty());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn path_without_file_name_is_an_error() {
+        assert!(matches!(
+            write_atomic(Path::new("/"), b"x"),
+            Err(Error::Io { .. })
+        ));
+    }
+
+    #[test]
+    fn create_dir_all_nests_and_names_the_path() {
+        let dir = scratch_dir("mkdir");
+        let nested = dir.join("a").join("b");
+        create_dir_all(&nested).unwrap();
+        assert!(nested.is_dir());
+        // A regular file in the way.
+        let file = dir.join("f");
+        write_atomic(&file, b"x").unwrap();
+        let bad = file.join("sub");
+        match create_dir_all(&bad) {
+            Err(Error::Io { path, .. }) => assert_eq!(path, bad),
+            other => panic!("expected an Io error, got {other:?}"),
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

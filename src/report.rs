@@ -1,0 +1,85 @@
+//! SVG plots of a run: line plots of signals over time ([`LinePlot`]) and the
+//! grid-search heatmap with an optimizer's path ([`Heatmap`]).
+//!
+//! Plots are drawn with `plotters` into an in-memory string and written with
+//! [`crate::output::write_atomic`]. Without font features plotters estimates text sizes
+//! itself and emits real SVG `<text>` elements, so titles, axis labels, tick labels and
+//! legends stay searchable text and the output does not depend on the fonts installed.
+//!
+//! Everything drawn is a pure function of the input: ranges, ticks, colours and
+//! decimation involve no randomness, clock or hash order, so the same data gives the
+//! same bytes.
+//!
+//! Inside: `axis` (ranges from data, ticks and tick labels for linear and log axes),
+//! `line` (line plots, staircases for delays, decimation of long series) and `heatmap`
+//! (coloured grid cells, colour bar and path overlay).
+
+mod axis;
+mod heatmap;
+mod line;
+
+use std::path::Path;
+
+use plotters::style::RGBColor;
+
+use crate::error::Error;
+
+pub use heatmap::{heatmap_svg, write_heatmap, Heatmap};
+pub use line::{line_plot_svg, write_line_plot, LinePlot, Series};
+
+/// How values are placed along an axis.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Scale {
+    /// Evenly spaced values.
+    #[default]
+    Linear,
+    /// Evenly spaced decades; values `<= 0` are not drawn.
+    Log,
+}
+
+/// Size of every plot [px]: 960 × 540, a 16:9 frame that stays legible on a page.
+const SIZE: (u32, u32) = (960, 540);
+
+/// Font family of all text; the SVG viewer picks the actual face.
+const FONT: &str = "sans-serif";
+
+/// Font sizes as plotters takes them (the SVG gets them divided by 1.24) [px]: title,
+/// axis labels, tick labels, legend.
+const TITLE_PX: f64 = 24.0;
+/// See [`TITLE_PX`].
+const DESC_PX: f64 = 17.0;
+/// See [`TITLE_PX`].
+const TICK_PX: f64 = 15.0;
+/// See [`TITLE_PX`].
+const LEGEND_PX: f64 = 15.0;
+
+/// Series colours, in order: Tableau 10 plus black and indigo, all distinct on white.
+const PALETTE: [RGBColor; 12] = [
+    RGBColor(0x1f, 0x77, 0xb4),
+    RGBColor(0xd6, 0x27, 0x28),
+    RGBColor(0x2c, 0xa0, 0x2c),
+    RGBColor(0xff, 0x7f, 0x0e),
+    RGBColor(0x94, 0x67, 0xbd),
+    RGBColor(0x8c, 0x56, 0x4b),
+    RGBColor(0xe3, 0x77, 0xc2),
+    RGBColor(0x7f, 0x7f, 0x7f),
+    RGBColor(0xbc, 0xbd, 0x22),
+    RGBColor(0x17, 0xbe, 0xcf),
+    RGBColor(0x00, 0x00, 0x00),
+    RGBColor(0x39, 0x3b, 0x79),
+];
+
+/// Colour of grid lines.
+const GRID: RGBColor = RGBColor(0xdd, 0xdd, 0xdd);
+
+/// Converts a plotters error into an [`Error::Io`] naming the file being drawn
+/// (`<svg>` when drawing into memory).
+fn plot_error<E: std::fmt::Display>(target: &Path) -> impl Fn(E) -> Error + '_ {
+    move |e| Error::io(target, std::io::Error::other(format!("drawing plot: {e}")))
+}
+
+/// Width [px] that plotters' built-in font metrics give `text` at `size` [px].
+fn text_width(text: &str, size: f64) -> u32 {
+    let em = size / 1.24 / 1.24;
+    (em * 0.7 * text.len() as f64).round() as u32
+}

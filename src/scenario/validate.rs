@@ -1,0 +1,672 @@
+//! JSON text → [`ScenarioFile`] → [`Scenario`]: parsing, checking, defaults, id resolution.
+//!
+//! Every problem is reported once, as a one-line [`Error`] that names where it is:
+//!
+//! - malformed JSON (and numbers serde_json cannot hold, such as `1e999`) is an
+//!   [`Error::Parse`] with line and column, plus the field being read when known;
+//! - a wrong type, a missing required key, an unknown key or a `null` is an
+//!   [`Error::Invalid`] whose path is the field (`model.bodies[2].mass`), with serde's
+//!   message and the line and column;
+//! - a bad value is an [`Error::Invalid`] whose path is the field as it appears in the
+//!   file (0-based indices: `forces[2].until`, `model.links[0].b`, `stabilizer.mu`) and
+//!   whose message names the value (`must be > 0 (got -1)`).
+//!
+//! Times are converted to integer nanoseconds ([`SimTime`]) here, once; `duration` must be
+//! a whole number of `dt` steps in nanoseconds, so the step count is exact.
+
+mod bodies;
+pub(super) mod checks;
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use serde_json::error::Category;
+
+use self::bodies::{model, Ids, Model};
+use self::checks::{finite, foreign, non_negative, num, positive, required, time, vector};
+use super::file::{
+    ForceFile, IntegratorFile, MeasurementFile, OutputFile, ScenarioFile, SolverFile, SolverKind,
+    StabilizerFile, StabilizerKind, DEFAULT_CG_MAX_ITERATIONS, DEFAULT_CG_TOLERANCE,
+    DEFAULT_MEASUREMENT_PERIOD, DEFAULT_SMC_EPSILON, DEFAULT_SMC_K, DEFAULT_SMC_MU,
+};
+use super::model::{ForceSpec, Integrator, OutputSpec, Scenario, Solver, Stabilizer};
+use crate::error::{Error, Result};
+use crate::kernel::SimTime;
+
+/// Reads, parses and validates a scenario file.
+///
+/// A file that cannot be read is an [`Error::Io`]; a file that is not UTF-8 is an
+/// [`Error::Parse`] at the first bad byte; everything else is as [`parse_str`].
+pub fn load(path: &Path) -> Result<Scenario> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let label = path.display().to_string();
+    let text = std::str::from_utf8(&bytes).map_err(|e| {
+        let before = &bytes[..e.valid_up_to()];
+        let line = 1 + before.iter().filter(|&&b| b == b'\n').count();
+        let column = 1 + before.iter().rev().take_while(|&&b| b != b'\n').count();
+        Error::Parse {
+            file: label.clone(),
+            message: "invalid UTF-8".to_string(),
+            line,
+            column,
+        }
+    })?;
+    parse_str(text, &label)
+}
+
+/// Parses and validates scenario JSON; `file_label` names the source in parse errors.
+pub fn parse_str(text: &str, file_label: &str) -> Result<Scenario> {
+    validate(parse_file(text, file_label)?)
+}
+
+/// Parses scenario JSON into the raw [`ScenarioFile`] without checking values.
+///
+/// A leading UTF-8 byte-order mark is skipped (some Windows editors write one).
+pub fn parse_file(text: &str, file_label: &str) -> Result<ScenarioFile> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let mut de = serde_json::Deserializer::from_str(text);
+    let file: ScenarioFile = serde_path_to_error::deserialize(&mut de).map_err(|e| {
+        let path = e.path().to_string();
+        serde_error(e.inner(), &path, file_label)
+    })?;
+    // Anything but whitespace after the top-level object is a syntax error.
+    de.end().map_err(|e| serde_error(&e, ".", file_label))?;
+    Ok(file)
+}
+
+/// Maps a serde_json error at field `path` (serde_path_to_error's form; `.` = the top
+/// level) to a one-line [`Error`].
+fn serde_error(err: &serde_json::Error, path: &str, file_label: &str) -> Error {
+    let (line, column) = (err.line(), err.column());
+    // serde_json's Display appends " at line L column C"; keep only the message.
+    let full = err.to_string();
+    let message = full
+        .strip_suffix(&format!(" at line {line} column {column}"))
+        .unwrap_or(&full);
+    let message = one_line(message);
+    // `.` is the top level, `?` a position serde_path_to_error could not name.
+    let path = (path != "." && path != "?").then(|| one_line(path));
+    // serde_json reports column 0 for an error before the first character.
+    let column = column.max(1);
+    match err.classify() {
+        Category::Data => Error::Invalid {
+            path: path.unwrap_or_else(|| "top level".to_string()),
+            message: format!("{message} (line {line}, column {column})"),
+        },
+        Category::Syntax | Category::Eof | Category::Io => Error::Parse {
+            file: one_line(file_label),
+            message: match path {
+                Some(path) => format!("{message} (in `{path}`)"),
+                None => message,
+            },
+            line,
+            column,
+        },
+    }
+}
+
+/// Escapes control characters (a key may contain an escaped newline) so that every
+/// error stays on one line.
+fn one_line(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        if c.is_control() {
+            out.extend(c.escape_debug());
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+/// Validates a parsed file and converts it into a [`Scenario`].
+///
+/// Defaults are applied as documented on [`ScenarioFile`]; body ids are resolved to
+/// indices into [`Scenario::bodies`] (file order; a grid expands row by row).
+pub fn validate(file: ScenarioFile) -> Result<Scenario> {
+    if file.name.trim().is_empty() {
+        return Err(Error::invalid("name", "must not be empty"));
+    }
+    let (dt, duration) = step_and_duration(file.dt, file.duration)?;
+    let integrator = match file.integrator {
+        IntegratorFile::Euler => Integrator::Euler,
+        IntegratorFile::SymplecticEuler => Integrator::SymplecticEuler,
+        IntegratorFile::Rk4 => Integrator::Rk4,
+    };
+    let stabilizer = stabilizer(&file.stabilizer)?;
+    let solver = solver(&file.solver)?;
+
+    let Model {
+        bodies,
+        links,
+        body_model,
+        ids,
+    } = model(&file.model, file.body_model)?;
+    let forces = file
+        .forces
+        .iter()
+        .enumerate()
+        .map(|(i, f)| force(&format!("forces[{i}]"), f, &ids))
+        .collect::<Result<Vec<_>>>()?;
+    let max_violation = positive("divergence.max_violation", file.divergence.max_violation)?;
+    let measurement_period = measurement(&file.measurement, dt, duration)?;
+    let output = output(&file.output, &ids, bodies.len())?;
+
+    Ok(Scenario {
+        name: file.name,
+        seed: file.seed,
+        duration,
+        dt,
+        steps: duration.as_nanos() / dt.as_nanos(),
+        integrator,
+        stabilizer,
+        solver,
+        body_model,
+        bodies,
+        links,
+        forces,
+        max_violation,
+        measurement_period,
+        output,
+    })
+}
+
+/// `dt` and `duration` in nanoseconds: `dt` ≥ 1 ns and a whole number of nanoseconds,
+/// `duration` a whole number of steps.
+fn step_and_duration(dt_secs: f64, duration_secs: f64) -> Result<(SimTime, SimTime)> {
+    positive("dt", dt_secs)?;
+    let dt = time("dt", dt_secs)?;
+    if dt == SimTime::ZERO {
+        return Err(Error::invalid(
+            "dt",
+            format!("must be at least 1 ns (got {} s)", num(dt_secs)),
+        ));
+    }
+    // Rounding to the nanosecond must not change the step noticeably (1.5 ns → 2 ns
+    // would be a silent 33 % change); 1 ppb leaves room for decimal round-off only.
+    let exact_ns = dt_secs * 1e9;
+    if (exact_ns - dt.as_nanos() as f64).abs() > 1e-9 * exact_ns {
+        return Err(Error::invalid(
+            "dt",
+            format!(
+                "must be a whole number of nanoseconds (got {} s)",
+                num(dt_secs)
+            ),
+        ));
+    }
+    positive("duration", duration_secs)?;
+    let duration = time("duration", duration_secs)?;
+    if dt > duration {
+        return Err(Error::invalid(
+            "dt",
+            format!(
+                "must not exceed duration (got dt {} s > duration {} s)",
+                num(dt_secs),
+                num(duration_secs)
+            ),
+        ));
+    }
+    let rest = duration.as_nanos() % dt.as_nanos();
+    if rest != 0 {
+        return Err(Error::invalid(
+            "duration",
+            format!(
+                "must be a whole number of dt steps (got {} s = {} steps of {} s + {})",
+                num(duration_secs),
+                duration.as_nanos() / dt.as_nanos(),
+                num(dt_secs),
+                SimTime(rest)
+            ),
+        ));
+    }
+    Ok((dt, duration))
+}
+
+/// The `stabilizer` section, thesis SMC values for any omitted key.
+fn stabilizer(s: &StabilizerFile) -> Result<Stabilizer> {
+    match s.kind {
+        StabilizerKind::Smc => {
+            if s.alpha.is_some() {
+                return Err(foreign("stabilizer.alpha", "smc"));
+            }
+            if s.beta.is_some() {
+                return Err(foreign("stabilizer.beta", "smc"));
+            }
+            Ok(Stabilizer::Smc {
+                mu: positive("stabilizer.mu", s.mu.unwrap_or(DEFAULT_SMC_MU))?,
+                k: positive("stabilizer.k", s.k.unwrap_or(DEFAULT_SMC_K))?,
+                epsilon: positive(
+                    "stabilizer.epsilon",
+                    s.epsilon.unwrap_or(DEFAULT_SMC_EPSILON),
+                )?,
+            })
+        }
+        StabilizerKind::Baumgarte => {
+            for (key, value) in [("mu", s.mu), ("k", s.k), ("epsilon", s.epsilon)] {
+                if value.is_some() {
+                    return Err(foreign(&format!("stabilizer.{key}"), "baumgarte"));
+                }
+            }
+            let alpha = s
+                .alpha
+                .ok_or_else(|| required("stabilizer.alpha", "baumgarte"))?;
+            let beta = s
+                .beta
+                .ok_or_else(|| required("stabilizer.beta", "baumgarte"))?;
+            Ok(Stabilizer::Baumgarte {
+                alpha: non_negative("stabilizer.alpha", alpha)?,
+                beta: non_negative("stabilizer.beta", beta)?,
+            })
+        }
+    }
+}
+
+/// The `solver` section.
+fn solver(s: &SolverFile) -> Result<Solver> {
+    match s.kind {
+        SolverKind::Cholesky => {
+            if s.max_iterations.is_some() {
+                return Err(foreign("solver.max_iterations", "cholesky"));
+            }
+            if s.tolerance.is_some() {
+                return Err(foreign("solver.tolerance", "cholesky"));
+            }
+            Ok(Solver::Cholesky)
+        }
+        SolverKind::Cg => {
+            let max_iterations = s.max_iterations.unwrap_or(DEFAULT_CG_MAX_ITERATIONS);
+            if max_iterations == 0 {
+                return Err(Error::invalid(
+                    "solver.max_iterations",
+                    "must be ≥ 1 (got 0)",
+                ));
+            }
+            let tolerance = non_negative(
+                "solver.tolerance",
+                s.tolerance.unwrap_or(DEFAULT_CG_TOLERANCE),
+            )?;
+            Ok(Solver::ConjugateGradient {
+                max_iterations,
+                tolerance,
+            })
+        }
+    }
+}
+
+/// One entry of `forces`: body resolved, times in nanoseconds.
+fn force(path: &str, f: &ForceFile, ids: &Ids) -> Result<ForceSpec> {
+    let body = ids.index(&format!("{path}.body"), f.body)?;
+    let amplitude = vector(&format!("{path}.amplitude"), f.amplitude)?;
+    let omega = finite(&format!("{path}.omega"), f.omega)?;
+    let phase = finite(&format!("{path}.phase"), f.phase)?;
+    let from = time(&format!("{path}.from"), f.from)?;
+    let until = match f.until {
+        None => None,
+        Some(until) => {
+            let until_path = format!("{path}.until");
+            finite(&until_path, until)?;
+            if until < f.from {
+                return Err(Error::invalid(
+                    until_path,
+                    format!(
+                        "must not be before from (got until {} s < from {} s)",
+                        num(until),
+                        num(f.from)
+                    ),
+                ));
+            }
+            Some(time(&until_path, until)?)
+        }
+    };
+    Ok(ForceSpec {
+        body,
+        amplitude,
+        omega,
+        phase,
+        from,
+        until,
+    })
+}
+
+/// The measurement period: explicit (checked), or the default rounded down to whole
+/// steps (at least one) and capped at the duration.
+fn measurement(m: &MeasurementFile, dt: SimTime, duration: SimTime) -> Result<SimTime> {
+    let Some(secs) = m.period else {
+        let default = SimTime::from_secs_f64(DEFAULT_MEASUREMENT_PERIOD).unwrap_or(duration);
+        let whole_steps = (default.as_nanos() / dt.as_nanos()).max(1) * dt.as_nanos();
+        return Ok(SimTime(whole_steps).min(duration));
+    };
+    let path = "measurement.period";
+    positive(path, secs)?;
+    let period = time(path, secs)?;
+    if period.as_nanos() % dt.as_nanos() != 0 {
+        return Err(Error::invalid(
+            path,
+            format!(
+                "must be a whole number of dt steps (got {} s with dt {} s)",
+                num(secs),
+                num(dt.as_secs_f64())
+            ),
+        ));
+    }
+    if period > duration {
+        return Err(Error::invalid(
+            path,
+            format!(
+                "must not exceed duration (got {} s > {} s)",
+                num(secs),
+                num(duration.as_secs_f64())
+            ),
+        ));
+    }
+    Ok(period)
+}
+
+/// The `output` section: ids resolved, defaults filled in.
+fn output(o: &OutputFile, ids: &Ids, body_count: usize) -> Result<OutputSpec> {
+    if o.decimation == 0 {
+        return Err(Error::invalid("output.decimation", "must be ≥ 1 (got 0)"));
+    }
+    let list = |key: &str, list: &[u32]| -> Result<Vec<usize>> {
+        let mut seen = BTreeMap::new();
+        let mut indices = Vec::with_capacity(list.len());
+        for (i, &id) in list.iter().enumerate() {
+            let path = format!("output.{key}[{i}]");
+            indices.push(ids.index(&path, id)?);
+            if let Some(first) = seen.insert(id, i) {
+                return Err(Error::invalid(
+                    path,
+                    format!("body {id} is listed twice (also output.{key}[{first}])"),
+                ));
+            }
+        }
+        Ok(indices)
+    };
+    let trace_bodies = match &o.trace_bodies {
+        Some(ids) => list("trace_bodies", ids)?,
+        None => (0..body_count).collect(),
+    };
+    let plot_bodies = match &o.plot_bodies {
+        Some(ids) => list("plot_bodies", ids)?,
+        None if body_count == 1 => vec![0],
+        None => vec![0, body_count - 1],
+    };
+    Ok(OutputSpec {
+        decimation: o.decimation,
+        trace_bodies,
+        plot_bodies,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::{UnitQuaternion, Vector3};
+
+    use super::*;
+    use crate::scenario::model::BodyModel;
+
+    /// The thesis scene (SPEC sections 3 and 7).
+    const THESIS: &str = r#"{
+        "name": "grid16_monolithic",
+        "seed": 7,
+        "duration": 30.0,
+        "dt": 0.001,
+        "integrator": "euler",
+        "stabilizer": {"kind": "smc", "mu": 0.05, "k": 10.0, "epsilon": 0.1},
+        "model": {
+            "grid": {"rows": 4, "cols": 4, "spacing": 1.8, "mass": 1.0, "size": 0.2}
+        },
+        "forces": [
+            {"body": 1, "amplitude": [0, 0, 20], "omega": 2.0, "phase": 0.0,
+             "from": 0.0, "until": 12.0},
+            {"body": 16, "amplitude": [0, 0, 20], "omega": 2.0, "from": 12.0, "until": 24.0}
+        ]
+    }"#;
+
+    /// Two bodies 3 m apart on x, one link between them; `extra` keys are spliced in.
+    fn pair(link: &str) -> String {
+        format!(
+            r#"{{"name": "pair", "seed": 1, "duration": 1.0, "dt": 0.01,
+                "model": {{
+                  "bodies": [{{"id": 10, "mass": 2.0, "size": 0.5, "position": [0, 0, 0]}},
+                             {{"id": 20, "mass": 1.0, "size": 0.2, "position": [3, 0, 0]}}],
+                  "links": [{link}]
+                }}}}"#
+        )
+    }
+
+    fn ok(text: &str) -> Scenario {
+        match parse_str(text, "test.json") {
+            Ok(s) => s,
+            Err(e) => panic!("expected a valid scenario, got: {e}"),
+        }
+    }
+
+    fn err(text: &str) -> String {
+        match parse_str(text, "test.json") {
+            Ok(_) => panic!("expected an error"),
+            Err(e) => e.to_string(),
+        }
+    }
+
+    #[test]
+    fn thesis_scene_bodies_and_links() {
+        let s = ok(THESIS);
+        assert_eq!(s.name, "grid16_monolithic");
+        assert_eq!(s.seed, 7);
+        assert_eq!(s.bodies.len(), 16);
+        assert_eq!(s.links.len(), 24);
+        // Link 1 joins bodies 1–2, link 2 joins bodies 1–5 (0-based indices).
+        assert_eq!((s.links[0].a, s.links[0].b), (0, 1));
+        assert_eq!((s.links[1].a, s.links[1].b), (0, 4));
+        assert!(s.links.iter().all(|l| l.length == 1.8));
+        assert!(s.links.iter().all(|l| l.anchor_a == Vector3::zeros()));
+        let last = &s.bodies[15];
+        assert_eq!(last.id, 16);
+        assert!((last.position - Vector3::new(5.4, 5.4, 0.0)).norm() < 1e-12);
+        let cube = 0.2 * 0.2 / 6.0;
+        assert!(s
+            .bodies
+            .iter()
+            .all(|b| b.inertia == Vector3::repeat(cube) && b.mass == 1.0 && b.size == 0.2));
+        assert!(s
+            .bodies
+            .iter()
+            .all(|b| b.orientation == UnitQuaternion::identity()));
+        assert_eq!(s.body_model, BodyModel::PointMass);
+    }
+
+    #[test]
+    fn thesis_scene_times_and_defaults() {
+        let s = ok(THESIS);
+        assert_eq!(s.dt, SimTime(1_000_000));
+        assert_eq!(s.duration, SimTime(30_000_000_000));
+        assert_eq!(s.steps, 30_000);
+        assert_eq!(s.integrator, Integrator::Euler);
+        assert_eq!(
+            s.stabilizer,
+            Stabilizer::Smc {
+                mu: 0.05,
+                k: 10.0,
+                epsilon: 0.1
+            }
+        );
+        assert_eq!(s.solver, Solver::Cholesky);
+        assert_eq!(s.max_violation, 1.0);
+        assert_eq!(s.measurement_period, SimTime(1_000_000_000));
+        assert_eq!(s.output.decimation, 10);
+        assert_eq!(s.output.trace_bodies, (0..16).collect::<Vec<_>>());
+        assert_eq!(s.output.plot_bodies, vec![0, 15]);
+        assert_eq!(s.forces.len(), 2);
+        assert_eq!(s.forces[1].body, 15);
+        assert_eq!(s.forces[1].phase, 0.0);
+        assert_eq!(s.forces[1].from, SimTime(12_000_000_000));
+        assert_eq!(s.forces[1].until, Some(SimTime(24_000_000_000)));
+        assert_eq!(s.forces[0].amplitude, Vector3::new(0.0, 0.0, 20.0));
+    }
+
+    #[test]
+    fn stabilizer_section_defaults_each_missing_field() {
+        let text = THESIS.replace(
+            r#"{"kind": "smc", "mu": 0.05, "k": 10.0, "epsilon": 0.1}"#,
+            r#"{"kind": "smc", "k": 3}"#,
+        );
+        let s = ok(&text);
+        assert_eq!(
+            s.stabilizer,
+            Stabilizer::Smc {
+                mu: 0.05,
+                k: 3.0,
+                epsilon: 0.1
+            }
+        );
+        let text = THESIS.replace(
+            r#"{"kind": "smc", "mu": 0.05, "k": 10.0, "epsilon": 0.1}"#,
+            r#"{"kind": "baumgarte", "alpha": 5, "beta": 0}"#,
+        );
+        assert_eq!(
+            ok(&text).stabilizer,
+            Stabilizer::Baumgarte {
+                alpha: 5.0,
+                beta: 0.0
+            }
+        );
+    }
+
+    #[test]
+    fn cg_solver_defaults() {
+        let text = THESIS.replace(
+            r#""integrator""#,
+            r#""solver": {"kind": "cg"}, "integrator""#,
+        );
+        assert_eq!(
+            ok(&text).solver,
+            Solver::ConjugateGradient {
+                max_iterations: 50,
+                tolerance: 1e-10
+            }
+        );
+    }
+
+    #[test]
+    fn centred_anchors_without_spin_give_point_masses() {
+        let s = ok(&pair(r#"{"a": 10, "b": 20}"#));
+        assert_eq!(s.body_model, BodyModel::PointMass);
+        assert_eq!(s.links[0].length, 3.0);
+        assert_eq!(s.output.plot_bodies, vec![0, 1]);
+    }
+
+    #[test]
+    fn off_centre_anchor_gives_rigid_bodies() {
+        let s = ok(&pair(r#"{"a": 10, "b": 20, "anchor_b": [-0.1, 0, 0]}"#));
+        assert_eq!(s.body_model, BodyModel::Rigid);
+        assert!((s.links[0].length - 2.9).abs() < 1e-15);
+    }
+
+    #[test]
+    fn spinning_body_gives_rigid_bodies() {
+        let text = pair(r#"{"a": 10, "b": 20}"#).replace(
+            r#""position": [3, 0, 0]"#,
+            r#""position": [3, 0, 0], "angular_velocity": [0, 0, 1]"#,
+        );
+        assert_eq!(ok(&text).body_model, BodyModel::Rigid);
+        let rigid =
+            pair(r#"{"a": 10, "b": 20}"#).replace(r#""seed""#, r#""body_model": "rigid", "seed""#);
+        assert_eq!(ok(&rigid).body_model, BodyModel::Rigid);
+    }
+
+    #[test]
+    fn explicit_point_mass_rejects_off_centre_anchor() {
+        let text = pair(r#"{"a": 10, "b": 20, "anchor_a": [0.1, 0, 0]}"#)
+            .replace(r#""seed""#, r#""body_model": "point_mass", "seed""#);
+        assert_eq!(
+            err(&text),
+            "model.links[0].anchor_a: must be [0, 0, 0] with body_model \"point_mass\" \
+             (got [0.1, 0, 0]); use \"rigid\" or \"auto\""
+        );
+    }
+
+    #[test]
+    fn defaulted_length_is_the_world_anchor_distance() {
+        // Body 10 turned 90° about z: its anchor (1, 0, 0) sits at (0, 1, 0) in the world;
+        // body 20's anchor (0, 0, 1) is unrotated, at (3, 0, 1).
+        let half = std::f64::consts::FRAC_PI_4;
+        let text = pair(r#"{"a": 10, "b": 20, "anchor_a": [1, 0, 0], "anchor_b": [0, 0, 1]}"#)
+            .replace(
+                r#""position": [0, 0, 0]"#,
+                &format!(
+                    r#""position": [0, 0, 0], "orientation": [{}, 0, 0, {}]"#,
+                    half.cos(),
+                    half.sin()
+                ),
+            );
+        let s = ok(&text);
+        let expected: f64 = (Vector3::new(0.0, 1.0, 0.0) - Vector3::new(3.0, 0.0, 1.0)).norm();
+        assert!(
+            (s.links[0].length - expected).abs() < 1e-12,
+            "{}",
+            s.links[0].length
+        );
+        assert_eq!(s.body_model, BodyModel::Rigid);
+    }
+
+    #[test]
+    fn explicit_inertia_and_orientation_are_normalized() {
+        let text = pair(r#"{"a": 10, "b": 20, "length": 2.5}"#).replace(
+            r#""position": [0, 0, 0]"#,
+            r#""position": [0, 0, 0], "inertia": [1, 2, 3], "orientation": [2, 0, 0, 0]"#,
+        );
+        let s = ok(&text);
+        assert_eq!(s.bodies[0].inertia, Vector3::new(1.0, 2.0, 3.0));
+        assert_eq!(s.bodies[0].orientation, UnitQuaternion::identity());
+        assert_eq!(s.bodies[1].inertia, Vector3::repeat(1.0 * 0.2 * 0.2 / 6.0));
+        assert_eq!(s.links[0].length, 2.5);
+    }
+
+    #[test]
+    fn measurement_default_is_rounded_to_steps_and_capped() {
+        let short =
+            pair(r#"{"a": 10, "b": 20}"#).replace(r#""duration": 1.0"#, r#""duration": 0.5"#);
+        assert_eq!(ok(&short).measurement_period, SimTime(500_000_000));
+        let odd = THESIS.replace(r#""dt": 0.001"#, r#""dt": 0.003"#);
+        assert_eq!(ok(&odd).measurement_period, SimTime(999_000_000));
+        let explicit = THESIS.replace(r#""seed""#, r#""measurement": {"period": 2.5}, "seed""#);
+        assert_eq!(ok(&explicit).measurement_period, SimTime(2_500_000_000));
+    }
+
+    #[test]
+    fn output_lists_resolve_ids_in_the_order_given() {
+        let text = THESIS.replace(
+            r#""seed""#,
+            r#""output": {"decimation": 1, "trace_bodies": [16, 2], "plot_bodies": [5]}, "seed""#,
+        );
+        let out = ok(&text).output;
+        assert_eq!(out.decimation, 1);
+        assert_eq!(out.trace_bodies, vec![15, 1]);
+        assert_eq!(out.plot_bodies, vec![4]);
+    }
+
+    #[test]
+    fn serde_errors_name_the_field_and_stay_on_one_line() {
+        let unknown = THESIS.replace(r#""rows": 4"#, r#""rows": 4, "colour": 1"#);
+        let e = err(&unknown);
+        assert!(e.starts_with("model.grid"), "{e}");
+        assert!(e.contains("unknown field `colour`"), "{e}");
+        let typed = THESIS.replace(r#""mass": 1.0"#, r#""mass": "heavy""#);
+        let e = err(&typed);
+        assert!(
+            e.starts_with("model.grid.mass: invalid type: string"),
+            "{e}"
+        );
+        let null = THESIS.replace(r#""until": 12.0"#, r#""until": null"#);
+        assert!(err(&null).starts_with("forces[0].until: invalid type: null"));
+        let syntax = THESIS.replace(r#""seed": 7,"#, r#""seed": 7"#);
+        match parse_str(&syntax, "thesis.json") {
+            Err(Error::Parse { line, column, .. }) => assert_eq!((line, column), (4, 9)),
+            other => panic!("expected a parse error, got {other:?}"),
+        }
+        let key = THESIS.replace(r#""seed""#, r#""se\ned""#);
+        let e = err(&key);
+        assert!(!e.contains('\n') && e.contains(r"se\ned"), "{e}");
+    }
+}

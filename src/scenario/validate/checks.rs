@@ -1,0 +1,128 @@
+//! Value checks and number formatting shared by the validation stages.
+//!
+//! Every check takes the field path it reports (`model.bodies[0].mass`) and returns the
+//! value on success, so a stage reads `let mass = positive(&path, b.mass)?;`.
+
+use nalgebra::Vector3;
+
+use crate::error::{Error, Result};
+use crate::kernel::SimTime;
+
+/// Formats a number for an error message: plain for ordinary magnitudes (`-1`, `0.05`),
+/// exponent form for tiny or huge ones (`1e-300`), `NaN`/`inf` as Rust spells them.
+pub(in crate::scenario) fn num(x: f64) -> String {
+    let a = x.abs();
+    if x == 0.0 || !x.is_finite() || (1e-4..1e16).contains(&a) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
+/// Formats a vector for an error message: `[0.1, 0, 0]`.
+pub(super) fn vec_str(v: &[f64]) -> String {
+    let parts: Vec<String> = v.iter().map(|&x| num(x)).collect();
+    format!("[{}]", parts.join(", "))
+}
+
+/// `x` if it is finite.
+pub(super) fn finite(path: &str, x: f64) -> Result<f64> {
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(Error::invalid(
+            path,
+            format!("must be a finite number (got {})", num(x)),
+        ))
+    }
+}
+
+/// `x` if it is finite and > 0.
+pub(in crate::scenario) fn positive(path: &str, x: f64) -> Result<f64> {
+    if finite(path, x)? > 0.0 {
+        Ok(x)
+    } else {
+        Err(Error::invalid(
+            path,
+            format!("must be > 0 (got {})", num(x)),
+        ))
+    }
+}
+
+/// `x` if it is finite and ≥ 0.
+pub(super) fn non_negative(path: &str, x: f64) -> Result<f64> {
+    if finite(path, x)? >= 0.0 {
+        Ok(x)
+    } else {
+        Err(Error::invalid(
+            path,
+            format!("must be ≥ 0 (got {})", num(x)),
+        ))
+    }
+}
+
+/// A vector whose components are all finite (an error names the component: `[1]`).
+pub(super) fn vector(path: &str, v: [f64; 3]) -> Result<Vector3<f64>> {
+    for (i, &x) in v.iter().enumerate() {
+        finite(&format!("{path}[{i}]"), x)?;
+    }
+    Ok(Vector3::from(v))
+}
+
+/// Seconds ≥ 0 to the nearest nanosecond.
+pub(super) fn time(path: &str, secs: f64) -> Result<SimTime> {
+    non_negative(path, secs)?;
+    SimTime::from_secs_f64(secs).ok_or_else(|| {
+        Error::invalid(
+            path,
+            format!(
+                "is beyond the range of simulated time (got {} s, limit about 1.8e10 s)",
+                num(secs)
+            ),
+        )
+    })
+}
+
+/// A required key of one kind of a section, absent from the file.
+pub(super) fn required(path: &str, kind: &str) -> Error {
+    Error::invalid(path, format!("is required for kind \"{kind}\""))
+}
+
+/// A key of a section that belongs to another kind than the one chosen.
+pub(super) fn foreign(path: &str, kind: &str) -> Error {
+    Error::invalid(path, format!("is not a key of kind \"{kind}\""))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_in_messages_are_readable() {
+        assert_eq!(num(-1.0), "-1");
+        assert_eq!(num(0.05), "0.05");
+        assert_eq!(num(1e-300), "1e-300");
+        assert_eq!(num(f64::NAN), "NaN");
+        assert_eq!(num(f64::INFINITY), "inf");
+        assert_eq!(vec_str(&[0.1, 0.0, -2.0]), "[0.1, 0, -2]");
+    }
+
+    #[test]
+    fn checks_name_the_path_and_the_value() {
+        let e = |r: Result<f64>| r.unwrap_err().to_string();
+        assert_eq!(e(positive("a.b", -1.0)), "a.b: must be > 0 (got -1)");
+        assert_eq!(e(non_negative("c", -0.5)), "c: must be ≥ 0 (got -0.5)");
+        assert_eq!(
+            e(finite("d", f64::NAN)),
+            "d: must be a finite number (got NaN)"
+        );
+        assert_eq!(
+            vector("v", [0.0, f64::INFINITY, 0.0])
+                .unwrap_err()
+                .to_string(),
+            "v[1]: must be a finite number (got inf)"
+        );
+        assert_eq!(time("t", 0.001).unwrap(), SimTime(1_000_000));
+        assert!(time("t", 1e11).is_err());
+    }
+}

@@ -1,0 +1,711 @@
+//! Bad scenario files: every one is rejected with a one-line error naming the field, and
+//! never panics. Plus a property test: any valid explicit scenario survives a JSON round
+//! trip and validates to the same `Scenario`.
+//!
+//! Each bad file is the valid `base()` with one change, so a case is one line (the case
+//! tables are exempt from rustfmt to keep it that way).
+
+use dsmcosim::scenario::file::{
+    BodyFile, BodyModelFile, DivergenceFile, ForceFile, GridFile, IntegratorFile, LinkFile,
+    MeasurementFile, ModelFile, OutputFile, ScenarioFile, SolverFile, SolverKind, StabilizerFile,
+    StabilizerKind,
+};
+use dsmcosim::scenario::validate::{parse_file, validate};
+use dsmcosim::scenario::{load, parse_str};
+use dsmcosim::Error;
+use proptest::prelude::*;
+use serde_json::{json, Value};
+
+/// A valid explicit scenario that sets every section.
+fn base() -> Value {
+    json!({
+        "name": "base",
+        "seed": 42,
+        "duration": 2.0,
+        "dt": 0.001,
+        "integrator": "rk4",
+        "stabilizer": {"kind": "smc", "mu": 0.05, "k": 10, "epsilon": 0.1},
+        "solver": {"kind": "cg", "max_iterations": 20, "tolerance": 1e-8},
+        "body_model": "auto",
+        "model": {
+            "bodies": [
+                {"id": 1, "mass": 1, "size": 0.2, "position": [0, 0, 0]},
+                {"id": 2, "mass": 1, "size": 0.2, "position": [1.8, 0, 0],
+                 "velocity": [0, 0, 0], "orientation": [1, 0, 0, 0],
+                 "angular_velocity": [0, 0, 0], "inertia": [0.1, 0.1, 0.1]},
+                {"id": 3, "mass": 1, "size": 0.2, "position": [1.8, 1.8, 0]}
+            ],
+            "links": [
+                {"a": 1, "b": 2, "length": 1.8},
+                {"a": 2, "b": 3, "anchor_a": [0, 0, 0], "anchor_b": [0, 0, 0]}
+            ]
+        },
+        "forces": [
+            {"body": 1, "amplitude": [0, 0, 20], "omega": 2, "phase": 0, "from": 0, "until": 1},
+            {"body": 3, "amplitude": [0, 0, 20], "omega": 2, "from": 1}
+        ],
+        "divergence": {"max_violation": 0.5},
+        "measurement": {"period": 0.5},
+        "output": {"decimation": 5, "trace_bodies": [1, 3], "plot_bodies": [3]}
+    })
+}
+
+/// The thesis grid, minimal.
+fn grid_base() -> Value {
+    json!({
+        "name": "grid", "seed": 7, "duration": 1.0, "dt": 0.001,
+        "model": {"grid": {"rows": 4, "cols": 4, "spacing": 1.8, "mass": 1.0, "size": 0.2}}
+    })
+}
+
+/// Sets (or adds) the value at a JSON pointer such as `/model/bodies/0/mass`.
+fn put(mut doc: Value, pointer: &str, value: Value) -> Value {
+    let (parent, key) = pointer.rsplit_once('/').expect("pointer starts with /");
+    let target = doc.pointer_mut(parent).expect("parent exists in the base");
+    match target {
+        Value::Object(map) => {
+            map.insert(key.to_string(), value);
+        }
+        Value::Array(items) => items[key.parse::<usize>().expect("array index")] = value,
+        _ => panic!("{parent} is not a container"),
+    }
+    doc
+}
+
+/// `base()` with one value set.
+fn set(pointer: &str, value: Value) -> String {
+    put(base(), pointer, value).to_string()
+}
+
+/// `grid_base()` with one value set.
+fn set_grid(pointer: &str, value: Value) -> String {
+    put(grid_base(), pointer, value).to_string()
+}
+
+/// `base()` with one key removed.
+fn remove(pointer: &str) -> String {
+    let mut doc = base();
+    let (parent, key) = pointer.rsplit_once('/').expect("pointer starts with /");
+    let removed = match doc.pointer_mut(parent).expect("parent exists") {
+        Value::Object(map) => map.remove(key),
+        _ => None,
+    };
+    assert!(removed.is_some(), "{pointer} is not in the base");
+    doc.to_string()
+}
+
+/// Rejected as `Invalid` at a path containing `path`, with a message containing
+/// `what`, on one line.
+#[track_caller]
+fn invalid(text: String, path: &str, what: &str) {
+    match parse_str(&text, "case.json") {
+        Err(e @ Error::Invalid { .. }) => check(&e, path, what),
+        Err(e) => panic!("expected an Invalid error at {path}, got {e:?}"),
+        Ok(_) => panic!("expected an Invalid error at {path}, but the file validated"),
+    }
+}
+
+/// Rejected as `Parse` (with a line and column) naming `path` (may be empty).
+#[track_caller]
+fn parse_error(text: &str, path: &str, what: &str) {
+    match parse_str(text, "case.json") {
+        Err(e @ Error::Parse { line, column, .. }) => {
+            assert!(line >= 1 && column >= 1, "{e}");
+            check(&e, path, what);
+        }
+        Err(e) => panic!("expected a Parse error, got {e:?}"),
+        Ok(_) => panic!("expected a Parse error, but the file validated"),
+    }
+}
+
+/// `validate` (without JSON, so values JSON cannot hold) rejects at `path`.
+#[track_caller]
+fn invalid_file(file: ScenarioFile, path: &str, what: &str) {
+    match validate(file) {
+        Err(e @ Error::Invalid { .. }) => check(&e, path, what),
+        Err(e) => panic!("expected an Invalid error at {path}, got {e:?}"),
+        Ok(_) => panic!("expected an Invalid error at {path}, but the file validated"),
+    }
+}
+
+#[track_caller]
+fn check(e: &Error, path: &str, what: &str) {
+    let shown = e.to_string();
+    assert!(!shown.contains('\n'), "not one line: {shown:?}");
+    assert_eq!(e.exit_code(), 2, "{shown}");
+    if let Error::Invalid { path: p, .. } = e {
+        assert!(
+            p.contains(path),
+            "path {p:?} does not name {path:?}: {shown}"
+        );
+    }
+    assert!(shown.contains(path), "{shown:?} does not name {path:?}");
+    assert!(shown.contains(what), "{shown:?} does not say {what:?}");
+}
+
+#[test]
+fn the_bases_are_valid() {
+    let s = parse_str(&base().to_string(), "base.json").unwrap();
+    assert_eq!((s.bodies.len(), s.links.len(), s.forces.len()), (3, 2, 2));
+    assert_eq!(s.steps, 2000);
+    let g = parse_str(&grid_base().to_string(), "grid.json").unwrap();
+    assert_eq!((g.bodies.len(), g.links.len()), (16, 24));
+}
+
+#[test]
+fn shipped_scenarios_load() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
+    let mut count = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "json") {
+            if let Err(e) = load(&path) {
+                panic!("{}: {e}", path.display());
+            }
+            count += 1;
+        }
+    }
+    assert!(count > 0, "no scenario files in {}", dir.display());
+}
+
+#[test]
+fn unreadable_files_are_reported() {
+    let missing = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("no_such_file.json");
+    assert!(matches!(load(&missing), Err(Error::Io { .. })));
+    let latin1 = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("latin1.json");
+    std::fs::write(&latin1, b"{\n  \"name\": \"caf\xe9\"}").unwrap();
+    match load(&latin1) {
+        Err(
+            e @ Error::Parse {
+                line: 2,
+                column: 15,
+                ..
+            },
+        ) => {
+            assert!(e.to_string().contains("invalid UTF-8"), "{e}")
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn malformed_json_reports_line_and_column() {
+    let text = "{\n  \"name\": \"x\",\n  \"seed\": 1\n  \"dt\": 0.1\n}";
+    match parse_str(text, "bad.json") {
+        Err(e @ Error::Parse { .. }) => {
+            assert_eq!(
+                e.to_string(),
+                "bad.json: expected `,` or `}` at line 4, column 3"
+            );
+        }
+        other => panic!("{other:?}"),
+    }
+    parse_error("", "", "EOF");
+    parse_error("{\"name\": \"x\",", "", "EOF");
+    parse_error(&(base().to_string() + " {}"), "", "trailing characters");
+    parse_error("{\"name\": \"x\" \"seed\": 1}", "", "expected");
+    parse_error("{'name': 'x'}", "", "key must be a string");
+}
+
+#[test]
+fn non_finite_numbers_are_rejected() {
+    let text = |v: &str| {
+        base()
+            .to_string()
+            .replace("\"mass\":1,", &format!("\"mass\":{v},"))
+    };
+    parse_error(
+        &text("1e999"),
+        "model.bodies[0].mass",
+        "number out of range",
+    );
+    parse_error(
+        &text("-1e999"),
+        "model.bodies[0].mass",
+        "number out of range",
+    );
+    parse_error(&text("NaN"), "model.bodies[0].mass", "expected value");
+    parse_error(&text("Infinity"), "model.bodies[0].mass", "expected value");
+    let text = base()
+        .to_string()
+        .replace("\"duration\":2.0", "\"duration\":1e400");
+    parse_error(&text, "duration", "number out of range");
+}
+
+#[test]
+fn non_finite_values_built_in_code_are_rejected() {
+    let file = || parse_file(&base().to_string(), "base.json").unwrap();
+    let mut f = file();
+    f.model.bodies.as_mut().unwrap()[0].mass = f64::NAN;
+    invalid_file(f, "model.bodies[0].mass", "finite number (got NaN)");
+    let mut f = file();
+    f.model.bodies.as_mut().unwrap()[2].position[1] = f64::INFINITY;
+    invalid_file(f, "model.bodies[2].position[1]", "got inf");
+    let mut f = file();
+    f.model.bodies.as_mut().unwrap()[1].angular_velocity[0] = f64::NEG_INFINITY;
+    invalid_file(f, "model.bodies[1].angular_velocity[0]", "got -inf");
+    let mut f = file();
+    f.model.bodies.as_mut().unwrap()[1].orientation[3] = f64::NAN;
+    invalid_file(f, "model.bodies[1].orientation[3]", "NaN");
+    let mut f = file();
+    f.forces[0].amplitude[2] = f64::NAN;
+    invalid_file(f, "forces[0].amplitude[2]", "NaN");
+    let mut f = file();
+    f.forces[1].omega = f64::INFINITY;
+    invalid_file(f, "forces[1].omega", "inf");
+    let mut f = file();
+    f.forces[0].until = Some(f64::NAN);
+    invalid_file(f, "forces[0].until", "NaN");
+    let mut f = file();
+    f.dt = f64::NAN;
+    invalid_file(f, "dt", "NaN");
+    let mut f = file();
+    f.model.links.as_mut().unwrap()[1].anchor_b[0] = f64::NAN;
+    invalid_file(f, "model.links[1].anchor_b[0]", "NaN");
+    let mut f = file();
+    f.stabilizer.epsilon = Some(f64::INFINITY);
+    invalid_file(f, "stabilizer.epsilon", "inf");
+}
+
+#[test]
+#[rustfmt::skip]
+fn unknown_keys_are_rejected() {
+    invalid(set("/partition", json!({})), "partition", "unknown field `partition`");
+    invalid(set("/network", json!({})), "network", "unknown field `network`");
+    invalid(set("/controller", json!({})), "controller", "unknown field");
+    invalid(set("/model/bodies/1/colour", json!(1)), "model.bodies[1].colour", "unknown field");
+    invalid(set("/model/links/0/stiffness", json!(1)), "model.links[0].stiffness", "unknown");
+    invalid(set("/forces/1/to", json!(2)), "forces[1].to", "unknown field `to`");
+    invalid(set("/stabilizer/gamma", json!(1)), "stabilizer.gamma", "unknown field");
+    invalid(set("/solver/restart", json!(1)), "solver.restart", "unknown field");
+    invalid(set("/output/format", json!("csv")), "output.format", "unknown field");
+    invalid(set("/divergence/max_w", json!(1)), "divergence.max_w", "unknown field");
+    invalid(set("/measurement/T", json!(1)), "measurement.T", "unknown field");
+    invalid(set("/model/springs", json!([])), "model.springs", "unknown field");
+    invalid(set_grid("/model/grid/depth", json!(1)), "model.grid.depth", "unknown field");
+    // A key holding an escaped newline stays on one line.
+    invalid(set("/se\ned", json!(1)), "se\\ned", "unknown field");
+}
+
+#[test]
+#[rustfmt::skip]
+fn wrong_types_are_rejected() {
+    invalid(set("/model/bodies/2/mass", json!("1 kg")), "model.bodies[2].mass", "string");
+    invalid(set("/seed", json!(-1)), "seed", "expected u64");
+    invalid(set("/seed", json!(1.5)), "seed", "expected u64");
+    invalid(set("/name", json!(7)), "name", "invalid type");
+    invalid(set("/dt", json!("1ms")), "dt", "invalid type");
+    invalid(set("/model/bodies/0/position", json!([0, 0])), "model.bodies[0].position", "length 2");
+    invalid(set("/model/bodies/0/position", json!([0, 0, "z"])), "model.bodies[0].position[2]", "string");
+    invalid(set("/model/bodies/0/id", json!(1.0)), "model.bodies[0].id", "expected u32");
+    invalid(set("/model/links/0/a", json!("1")), "model.links[0].a", "invalid type");
+    invalid(set("/integrator", json!("rk5")), "integrator", "unknown variant `rk5`");
+    invalid(set("/body_model", json!("soft")), "body_model", "unknown variant");
+    invalid(set("/stabilizer/kind", json!("pid")), "stabilizer.kind", "unknown variant");
+    invalid(set("/solver/kind", json!("lu")), "solver.kind", "unknown variant");
+    invalid(set("/forces", json!({})), "forces", "invalid type");
+    invalid(set("/output/trace_bodies", json!([1, -3])), "output.trace_bodies[1]", "expected u32");
+    invalid(set("/output/decimation", json!(-1)), "output.decimation", "expected u64");
+    invalid(set_grid("/model/grid/rows", json!(-4)), "model.grid.rows", "expected u32");
+    invalid(set_grid("/model/grid/cols", json!(2.5)), "model.grid.cols", "expected u32");
+    invalid(remove("/model/bodies/1/mass"), "model.bodies[1]", "missing field `mass`");
+    invalid(remove("/forces/0/amplitude"), "forces[0]", "missing field `amplitude`");
+    invalid(remove("/stabilizer/kind"), "stabilizer", "missing field `kind`");
+    invalid(remove("/seed"), "top level", "missing field `seed`");
+}
+
+#[test]
+#[rustfmt::skip]
+fn null_is_never_a_default() {
+    invalid(set("/model/bodies/0/mass", Value::Null), "model.bodies[0].mass", "null");
+    invalid(set("/forces/0/until", Value::Null), "forces[0].until", "null");
+    invalid(set("/forces/0/omega", Value::Null), "forces[0].omega", "null");
+    invalid(set("/model/links/1/length", Value::Null), "model.links[1].length", "null");
+    invalid(set("/model/bodies/1/inertia", Value::Null), "model.bodies[1].inertia", "null");
+    invalid(set("/model/bodies/1/velocity", Value::Null), "model.bodies[1].velocity", "null");
+    invalid(set("/stabilizer/mu", Value::Null), "stabilizer.mu", "null");
+    invalid(set("/stabilizer", Value::Null), "stabilizer", "null");
+    invalid(set("/forces", Value::Null), "forces", "null");
+    invalid(set("/measurement/period", Value::Null), "measurement.period", "null");
+    invalid(set("/output/plot_bodies", Value::Null), "output.plot_bodies", "null");
+    invalid(set("/model/grid", Value::Null), "model.grid", "null");
+}
+
+#[test]
+#[rustfmt::skip]
+fn non_positive_physical_values_are_rejected() {
+    invalid(set("/model/bodies/0/mass", json!(-1)), "model.bodies[0].mass", "must be > 0 (got -1)");
+    invalid(set("/model/bodies/2/mass", json!(0)), "model.bodies[2].mass", "must be > 0 (got 0)");
+    invalid(set("/model/bodies/1/size", json!(0)), "model.bodies[1].size", "must be > 0 (got 0)");
+    invalid(set("/model/bodies/1/size", json!(-0.2)), "model.bodies[1].size", "got -0.2");
+    invalid(set("/dt", json!(0)), "dt", "must be > 0 (got 0)");
+    invalid(set("/dt", json!(-0.001)), "dt", "must be > 0 (got -0.001)");
+    invalid(set("/duration", json!(0)), "duration", "must be > 0 (got 0)");
+    invalid(set("/duration", json!(-30)), "duration", "must be > 0 (got -30)");
+    invalid(set("/model/links/0/length", json!(0)), "model.links[0].length", "must be > 0");
+    invalid(set("/model/links/0/length", json!(-1.8)), "model.links[0].length", "got -1.8");
+    invalid(set("/stabilizer/epsilon", json!(0)), "stabilizer.epsilon", "must be > 0 (got 0)");
+    invalid(set("/stabilizer/mu", json!(-0.05)), "stabilizer.mu", "must be > 0 (got -0.05)");
+    invalid(set("/stabilizer/k", json!(0)), "stabilizer.k", "must be > 0 (got 0)");
+    invalid(set("/model/bodies/1/inertia", json!([0.1, 0, 0.1])), "model.bodies[1].inertia[1]", "must be > 0 (got 0)");
+    invalid(set("/model/bodies/1/inertia", json!([0.1, 0.1, -1])), "model.bodies[1].inertia[2]", "got -1");
+    invalid(set("/divergence/max_violation", json!(0)), "divergence.max_violation", "must be > 0");
+    invalid(set("/measurement/period", json!(0)), "measurement.period", "must be > 0 (got 0)");
+    let tiny = put(base(), "/model/bodies/0/mass", json!(1e-300));
+    let tiny = put(tiny, "/model/bodies/0/size", json!(1e-20)).to_string();
+    invalid(tiny, "model.bodies[0].inertia", "the cube default m s²/6 is 0");
+}
+
+#[test]
+#[rustfmt::skip]
+fn time_step_and_duration_must_fit() {
+    invalid(set("/dt", json!(3)), "dt", "must not exceed duration (got dt 3 s > duration 2 s)");
+    invalid(set("/duration", json!(2.0005)), "duration", "whole number of dt steps");
+    invalid(set("/dt", json!(0.0003)), "duration", "whole number of dt steps");
+    invalid(set("/dt", json!(1e-10)), "dt", "at least 1 ns");
+    invalid(set("/dt", json!(1.5e-9)), "dt", "whole number of nanoseconds");
+    invalid(set("/duration", json!(1e12)), "duration", "range of simulated time");
+    invalid(set("/measurement/period", json!(0.0015)), "measurement.period", "whole number of dt steps");
+    invalid(set("/measurement/period", json!(3)), "measurement.period", "must not exceed duration");
+}
+
+#[test]
+#[rustfmt::skip]
+fn force_windows_are_checked() {
+    invalid(set("/forces/0/until", json!(-1)), "forces[0].until", "must not be before from");
+    invalid(set("/forces/1/until", json!(0.5)), "forces[1].until", "got until 0.5 s < from 1 s");
+    invalid(set("/forces/1/from", json!(-1)), "forces[1].from", "must be ≥ 0 (got -1)");
+    invalid(set("/forces/0/from", json!(-0.5)), "forces[0].from", "got -0.5");
+}
+
+#[test]
+#[rustfmt::skip]
+fn ids_must_resolve() {
+    invalid(set("/forces/1/body", json!(9)), "forces[1].body", "no body with id 9");
+    invalid(set("/model/links/0/a", json!(4)), "model.links[0].a", "no body with id 4");
+    invalid(set("/model/links/1/b", json!(0)), "model.links[1].b", "no body with id 0");
+    invalid(set("/model/links/1/b", json!(2)), "model.links[1].b", "cannot join body 2 to itself");
+    invalid(set("/model/bodies/2/id", json!(1)), "model.bodies[2].id", "duplicate id 1");
+    invalid(set("/output/trace_bodies", json!([1, 5])), "output.trace_bodies[1]", "no body with id 5");
+    invalid(set("/output/plot_bodies", json!([7])), "output.plot_bodies[0]", "no body with id 7");
+    invalid(set("/output/trace_bodies", json!([3, 1, 3])), "output.trace_bodies[2]", "listed twice");
+    invalid(set_grid("/forces", json!([{"body": 17, "amplitude": [0, 0, 1]}])), "forces[0].body", "no body with id 17");
+    invalid(set_grid("/output", json!({"plot_bodies": [1, 17]})), "output.plot_bodies[1]", "no body with id 17");
+}
+
+#[test]
+#[rustfmt::skip]
+fn orientations_and_anchors_are_checked() {
+    invalid(set("/model/bodies/1/orientation", json!([0, 0, 0, 0])), "model.bodies[1].orientation", "zero quaternion");
+    invalid(set("/model/bodies/1/orientation", json!([1, 0, 0])), "model.bodies[1].orientation", "length 3");
+    let coincident = put(base(), "/model/bodies/2/position", json!([1.8, 0, 0])).to_string();
+    invalid(coincident, "model.links[1].length", "coincide");
+    // Off-centre anchors that meet in the world are coincident too.
+    let meet = put(base(), "/model/links/1/anchor_a", json!([0, 0.9, 0]));
+    let meet = put(meet, "/model/links/1/anchor_b", json!([0, -0.9, 0])).to_string();
+    invalid(meet, "model.links[1].length", "coincide");
+}
+
+#[test]
+fn explicit_point_mass_must_not_need_rotation() {
+    let pm = put(base(), "/body_model", json!("point_mass"));
+    let anchor = put(pm.clone(), "/model/links/1/anchor_a", json!([0, 0.1, 0])).to_string();
+    invalid(anchor, "model.links[1].anchor_a", "point_mass");
+    let spin = put(
+        pm.clone(),
+        "/model/bodies/2/angular_velocity",
+        json!([0, 0, 1]),
+    )
+    .to_string();
+    invalid(spin, "model.bodies[2].angular_velocity", "got [0, 0, 1]");
+    assert!(parse_str(&pm.to_string(), "pm.json").is_ok());
+}
+
+#[test]
+#[rustfmt::skip]
+fn model_needs_exactly_one_form() {
+    let grid = json!({"rows": 2, "cols": 2, "spacing": 1, "mass": 1, "size": 0.1});
+    invalid(set("/model/grid", grid.clone()), "model", "not both");
+    invalid(set("/model", json!({})), "model", "needs either `grid` or `bodies`");
+    invalid(set("/model", json!({"links": []})), "model.links", "needs `bodies`");
+    invalid(set("/model", json!({"grid": grid, "links": []})), "model", "not both");
+    invalid(set("/model/bodies", json!([])), "model.bodies", "at least one body");
+    invalid(remove("/model"), "top level", "missing field `model`");
+}
+
+#[test]
+#[rustfmt::skip]
+fn grid_values_are_checked() {
+    invalid(set_grid("/model/grid/rows", json!(0)), "model.grid.rows", "must be ≥ 1 (got 0)");
+    invalid(set_grid("/model/grid/cols", json!(0)), "model.grid.cols", "must be ≥ 1 (got 0)");
+    invalid(set_grid("/model/grid/spacing", json!(0)), "model.grid.spacing", "must be > 0 (got 0)");
+    invalid(set_grid("/model/grid/spacing", json!(-1.8)), "model.grid.spacing", "got -1.8");
+    invalid(set_grid("/model/grid/mass", json!(0)), "model.grid.mass", "must be > 0");
+    invalid(set_grid("/model/grid/size", json!(-0.2)), "model.grid.size", "must be > 0");
+    invalid(set_grid("/model/grid/rows", json!(1_000_000)), "model.grid.rows", "more than the limit");
+}
+
+#[test]
+#[rustfmt::skip]
+fn stabilizer_and_solver_sections_are_checked() {
+    let baumgarte = |a: Value, b: Value| set("/stabilizer", json!({"kind": "baumgarte", "alpha": a, "beta": b}));
+    assert!(parse_str(&baumgarte(json!(0), json!(0)), "b.json").is_ok());
+    invalid(baumgarte(json!(-1), json!(5)), "stabilizer.alpha", "must be ≥ 0 (got -1)");
+    invalid(baumgarte(json!(5), json!(-2)), "stabilizer.beta", "must be ≥ 0 (got -2)");
+    invalid(set("/stabilizer", json!({"kind": "baumgarte", "beta": 1})), "stabilizer.alpha", "required");
+    invalid(set("/stabilizer", json!({"kind": "baumgarte", "alpha": 1, "beta": 1, "mu": 0.1})), "stabilizer.mu", "not a key of kind \"baumgarte\"");
+    invalid(set("/stabilizer/alpha", json!(1)), "stabilizer.alpha", "not a key of kind \"smc\"");
+    invalid(set("/solver/max_iterations", json!(0)), "solver.max_iterations", "must be ≥ 1 (got 0)");
+    invalid(set("/solver/tolerance", json!(-1e-9)), "solver.tolerance", "must be ≥ 0 (got -1e-9)");
+    invalid(set("/solver", json!({"kind": "cholesky", "tolerance": 1e-6})), "solver.tolerance", "not a key of kind \"cholesky\"");
+}
+
+#[test]
+#[rustfmt::skip]
+fn other_sections_are_checked() {
+    invalid(set("/name", json!("")), "name", "must not be empty");
+    invalid(set("/name", json!("  ")), "name", "must not be empty");
+    invalid(set("/output/decimation", json!(0)), "output.decimation", "must be ≥ 1 (got 0)");
+    invalid(set("/divergence/max_violation", json!(-1)), "divergence.max_violation", "got -1");
+}
+
+// ---------------------------------------------------------------------------------------
+// Property test: JSON round trip of random valid explicit scenarios.
+
+/// `k / scale` for k in `lo..hi`: a short decimal, so that JSON printing and parsing
+/// are exact without serde_json's `float_roundtrip` feature.
+fn decimal(lo: i64, hi: i64, scale: f64) -> impl Strategy<Value = f64> {
+    (lo..hi).prop_map(move |k| k as f64 / scale)
+}
+
+fn vec3(lo: i64, hi: i64, scale: f64) -> impl Strategy<Value = [f64; 3]> {
+    [
+        decimal(lo, hi, scale),
+        decimal(lo, hi, scale),
+        decimal(lo, hi, scale),
+    ]
+}
+
+/// A body at index `i`: x in [10 i, 10 i + 5), so positions are distinct and far apart.
+fn body(i: usize, id: u32) -> impl Strategy<Value = BodyFile> {
+    (
+        decimal(1, 1000, 100.0),
+        decimal(1, 100, 100.0),
+        prop::option::of(vec3(1, 100, 1000.0)),
+        (
+            decimal(0, 50, 10.0),
+            decimal(-50, 50, 10.0),
+            decimal(-50, 50, 10.0),
+        ),
+        vec3(-10, 10, 10.0),
+        // Non-zero: w in 1..4.
+        (1i64..4, -3i64..4, -3i64..4, -3i64..4),
+        prop_oneof![Just([0.0; 3]), vec3(-10, 10, 10.0)],
+    )
+        .prop_map(
+            move |(mass, size, inertia, (x, y, z), velocity, q, angular_velocity)| BodyFile {
+                id,
+                mass,
+                size,
+                inertia,
+                position: [10.0 * i as f64 + x, y, z],
+                velocity,
+                orientation: [q.0 as f64, q.1 as f64, q.2 as f64, q.3 as f64],
+                angular_velocity,
+            },
+        )
+}
+
+fn link(ids: Vec<u32>) -> impl Strategy<Value = LinkFile> {
+    let n = ids.len();
+    (
+        0..n,
+        1..n,
+        prop::option::of(decimal(1, 1000, 100.0)),
+        prop_oneof![Just([0.0; 3]), vec3(-3, 4, 10.0)],
+        prop_oneof![Just([0.0; 3]), vec3(-3, 4, 10.0)],
+    )
+        .prop_map(move |(a, offset, length, anchor_a, anchor_b)| LinkFile {
+            a: ids[a],
+            b: ids[(a + offset) % n],
+            length,
+            anchor_a,
+            anchor_b,
+        })
+}
+
+fn force(ids: Vec<u32>) -> impl Strategy<Value = ForceFile> {
+    (
+        prop::sample::select(ids),
+        vec3(-200, 200, 10.0),
+        decimal(-100, 100, 10.0),
+        decimal(-31, 32, 10.0),
+        0i64..100,
+        prop::option::of(0i64..100),
+    )
+        // Times in tenths of a second, summed as integers so that `until` is a short
+        // decimal too.
+        .prop_map(|(body, amplitude, omega, phase, from, length)| ForceFile {
+            body,
+            amplitude,
+            omega,
+            phase,
+            from: from as f64 / 10.0,
+            until: length.map(|l| (from + l) as f64 / 10.0),
+        })
+}
+
+fn stabilizer() -> impl Strategy<Value = StabilizerFile> {
+    let opt = |lo, hi, scale| prop::option::of(decimal(lo, hi, scale));
+    prop_oneof![
+        (opt(1, 100, 1000.0), opt(1, 100, 1.0), opt(1, 100, 100.0)).prop_map(|(mu, k, epsilon)| {
+            StabilizerFile {
+                kind: StabilizerKind::Smc,
+                mu,
+                k,
+                epsilon,
+                alpha: None,
+                beta: None,
+            }
+        }),
+        (decimal(0, 100, 1.0), decimal(0, 100, 1.0)).prop_map(|(alpha, beta)| StabilizerFile {
+            kind: StabilizerKind::Baumgarte,
+            alpha: Some(alpha),
+            beta: Some(beta),
+            ..StabilizerFile::default()
+        }),
+    ]
+}
+
+fn solver() -> impl Strategy<Value = SolverFile> {
+    prop_oneof![
+        Just(SolverFile::default()),
+        (
+            prop::option::of(1usize..500),
+            prop::option::of(decimal(0, 100, 1e12))
+        )
+            .prop_map(|(max_iterations, tolerance)| SolverFile {
+                kind: SolverKind::Cg,
+                max_iterations,
+                tolerance,
+            }),
+    ]
+}
+
+/// Picks an optional sub-list of the ids, in random order.
+fn id_list(ids: Vec<u32>) -> impl Strategy<Value = Option<Vec<u32>>> {
+    let n = ids.len();
+    prop::option::of(prop::sample::subsequence(ids, 0..=n).prop_shuffle())
+}
+
+/// A random valid explicit scenario.
+fn scenario() -> impl Strategy<Value = ScenarioFile> {
+    // Distinct ids in random order.
+    let ids = prop::collection::btree_set(0u32..1000, 1..=6)
+        .prop_flat_map(|set| Just(set.into_iter().collect::<Vec<_>>()).prop_shuffle());
+    ids.prop_flat_map(|ids| {
+        let bodies: Vec<_> = ids.iter().enumerate().map(|(i, &id)| body(i, id)).collect();
+        let links = if ids.len() > 1 {
+            prop::collection::vec(link(ids.clone()), 0..8).boxed()
+        } else {
+            Just(Vec::new()).boxed()
+        };
+        let dt_ns = prop::sample::select(vec![500_000u64, 1_000_000, 2_000_000, 10_000_000]);
+        (
+            (
+                bodies,
+                links,
+                prop::collection::vec(force(ids.clone()), 0..4),
+            ),
+            (any::<u64>(), dt_ns, 1u64..3000, 1u64..100),
+            (
+                prop::sample::select(vec![
+                    IntegratorFile::Euler,
+                    IntegratorFile::SymplecticEuler,
+                    IntegratorFile::Rk4,
+                ]),
+                stabilizer(),
+                solver(),
+                prop::sample::select(vec![BodyModelFile::Auto, BodyModelFile::Rigid]),
+            ),
+            (
+                decimal(1, 1000, 100.0),
+                prop::bool::ANY,
+                1u64..100,
+                id_list(ids.clone()),
+                id_list(ids),
+            ),
+        )
+    })
+    .prop_map(
+        |(
+            (bodies, links, forces),
+            (seed, dt_ns, steps, period_steps),
+            (integrator, stabilizer, solver, body_model),
+            (max_violation, explicit_period, decimation, trace_bodies, plot_bodies),
+        )| {
+            let secs = |ns: u64| ns as f64 / 1e9;
+            ScenarioFile {
+                name: format!("random {seed}"),
+                seed,
+                duration: secs(dt_ns * steps),
+                dt: secs(dt_ns),
+                integrator,
+                stabilizer,
+                solver,
+                body_model,
+                model: ModelFile {
+                    grid: None,
+                    bodies: Some(bodies),
+                    links: Some(links),
+                },
+                forces,
+                divergence: DivergenceFile { max_violation },
+                measurement: MeasurementFile {
+                    period: explicit_period.then(|| secs(dt_ns * period_steps.min(steps))),
+                },
+                output: OutputFile {
+                    decimation,
+                    trace_bodies,
+                    plot_bodies,
+                },
+            }
+        },
+    )
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    #[test]
+    fn valid_scenarios_survive_a_json_round_trip(file in scenario()) {
+        let direct = validate(file.clone());
+        prop_assert!(direct.is_ok(), "generated scenario is invalid: {:?}", direct.err());
+        let text = serde_json::to_string_pretty(&file).unwrap();
+        prop_assert_eq!(&parse_file(&text, "random.json").unwrap(), &file);
+        prop_assert_eq!(parse_str(&text, "random.json").unwrap(), direct.unwrap());
+    }
+}
+
+#[test]
+fn grid_files_survive_a_json_round_trip() {
+    let file = ScenarioFile {
+        model: ModelFile {
+            grid: Some(GridFile {
+                rows: 3,
+                cols: 5,
+                spacing: 0.7,
+                mass: 2.0,
+                size: 0.1,
+            }),
+            bodies: None,
+            links: None,
+        },
+        ..parse_file(&grid_base().to_string(), "grid.json").unwrap()
+    };
+    let text = serde_json::to_string(&file).unwrap();
+    assert_eq!(parse_file(&text, "grid.json").unwrap(), file);
+    let s = parse_str(&text, "grid.json").unwrap();
+    assert_eq!((s.bodies.len(), s.links.len()), (15, 22));
+    assert_eq!(s, validate(file).unwrap());
+}
