@@ -1,5 +1,10 @@
-//! Measuring and (as the project grows) controlling: the constraint-violation cost.
+//! Measuring and controlling: the constraint-violation cost, the Dynamic Simplex Method
+//! that tunes the delays online, and the static Nelder–Mead baseline.
 
 pub mod cost;
+pub mod dsm;
+pub mod nelder_mead;
 
 pub use cost::{CostMeter, Epoch};
+pub use dsm::{d_s_min, Dsm, DsmConfig, DsmError, DsmPhase, Feasible, SimplexError};
+pub use nelder_mead::{NelderMead, NelderMeadConfig, NelderMeadPhase};

@@ -1,5 +1,10 @@
-//! The event kernel: integer simulated time (and, as it grows, the event queue).
+//! The event kernel: integer simulated time and the event queue.
+//!
+//! Events leave the queue in `(time, class, seq)` order; the class order at equal time
+//! is a documented guarantee (see [`queue`]).
 
+pub mod queue;
 pub mod time;
 
+pub use queue::{EventClass, EventKey, Kernel, KernelError};
 pub use time::SimTime;

@@ -28,10 +28,13 @@
 
 pub mod cli;
 pub mod control;
+pub mod cosim;
 pub mod error;
 pub mod kernel;
 pub mod multibody;
+pub mod network;
 pub mod output;
+pub mod partition;
 pub mod progress;
 pub mod report;
 pub mod run;

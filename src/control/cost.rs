@@ -5,7 +5,7 @@
 //! in `[t, t+T)`: `∫ w² du ≈ Σ_k w_l(t_k)² dt`. It is exact for the piecewise-constant
 //! reading of the step values and converges at first order in `dt` otherwise. A final
 //! window shorter than `T` (duration not a multiple of `T`) is measured over its own
-//! length.
+//! length. The co-simulation closes windows with measurement events of the kernel.
 
 use crate::kernel::SimTime;
 
@@ -20,11 +20,10 @@ pub struct Epoch {
     pub cost: f64,
 }
 
-/// Accumulates `∫ w²` per link and closes a window every `period`.
+/// Accumulates `∫ w²` per link; the owner closes a window at its end time.
 #[derive(Debug, Clone)]
 pub struct CostMeter {
     dt: SimTime,
-    period: SimTime,
     start: SimTime,
     steps: u64,
     sum_sq: Vec<f64>,
@@ -32,11 +31,10 @@ pub struct CostMeter {
 }
 
 impl CostMeter {
-    /// A meter for `links` links with step `dt` and window length `period`, starting at 0.
-    pub fn new(links: usize, dt: SimTime, period: SimTime) -> CostMeter {
+    /// A meter for `links` links with step `dt`, its first window starting at 0.
+    pub fn new(links: usize, dt: SimTime) -> CostMeter {
         CostMeter {
             dt,
-            period,
             start: SimTime::ZERO,
             steps: 0,
             sum_sq: vec![0.0; links],
@@ -44,35 +42,27 @@ impl CostMeter {
         }
     }
 
-    /// Adds the step starting at `t` with constraint values `w`; closes the window
-    /// when the step completes it.
-    pub fn add(&mut self, t: SimTime, w: &[f64]) {
+    /// Adds one step's constraint values `w`.
+    pub fn add(&mut self, w: &[f64]) {
         for (s, w) in self.sum_sq.iter_mut().zip(w) {
             *s += w * w;
         }
         self.steps += 1;
-        let end = SimTime(t.0 + self.dt.0);
-        if end.0 - self.start.0 >= self.period.0 {
-            self.close(end);
-        }
     }
 
-    /// Closes a partial last window, if steps were added since the last close.
-    pub fn finish(&mut self) {
-        if self.steps > 0 {
-            let end = SimTime(self.start.0 + self.steps * self.dt.0);
-            self.close(end);
-        }
-    }
-
-    fn close(&mut self, end: SimTime) {
+    /// Closes the window `[start, end)` and starts the next at `end`; returns it.
+    /// A window with no steps (zero length) costs 0.
+    pub fn close(&mut self, end: SimTime) -> &Epoch {
         let dt = self.dt.as_secs_f64();
-        let length = (end.0 - self.start.0) as f64 * 1e-9;
-        let cost = self
-            .sum_sq
-            .iter()
-            .map(|s| (s * dt / length).sqrt())
-            .sum::<f64>();
+        let length = end.0.saturating_sub(self.start.0) as f64 * 1e-9;
+        let cost = if self.steps == 0 || length <= 0.0 {
+            0.0
+        } else {
+            self.sum_sq
+                .iter()
+                .map(|s| (s * dt / length).sqrt())
+                .sum::<f64>()
+        };
         self.epochs.push(Epoch {
             t_start: self.start,
             t_end: end,
@@ -81,6 +71,7 @@ impl CostMeter {
         self.sum_sq.fill(0.0);
         self.steps = 0;
         self.start = end;
+        &self.epochs[self.epochs.len() - 1]
     }
 
     /// The closed windows.
@@ -106,9 +97,12 @@ mod tests {
     fn constant_violation_costs_its_magnitude_per_link() {
         // w = 0.01 m on 3 links for a whole window: C = 3 × 0.01.
         let dt = SimTime(1_000_000);
-        let mut m = CostMeter::new(3, dt, SimTime(1_000_000_000));
+        let mut m = CostMeter::new(3, dt);
         for k in 0..2000 {
-            m.add(SimTime(k * dt.0), &[0.01, -0.01, 0.01]);
+            m.add(&[0.01, -0.01, 0.01]);
+            if k % 1000 == 999 {
+                m.close(SimTime((k + 1) * dt.0));
+            }
         }
         assert_eq!(m.epochs().len(), 2);
         for e in m.epochs() {
@@ -121,25 +115,26 @@ mod tests {
     fn sine_violation_costs_its_rms() {
         // w = A sin(2π t) over whole periods: RMS = A/√2.
         let dt = SimTime(100_000);
-        let mut m = CostMeter::new(1, dt, SimTime(1_000_000_000));
+        let mut m = CostMeter::new(1, dt);
         for k in 0..10_000u64 {
             let t = k as f64 * 1e-4;
-            m.add(
-                SimTime(k * dt.0),
-                &[0.5 * (2.0 * std::f64::consts::PI * t).sin()],
-            );
+            m.add(&[0.5 * (2.0 * std::f64::consts::PI * t).sin()]);
         }
+        m.close(SimTime(10_000 * dt.0));
         assert!((m.epochs()[0].cost - 0.5 / 2f64.sqrt()).abs() < 1e-9);
     }
 
     #[test]
     fn partial_last_window_uses_its_own_length() {
         let dt = SimTime(1_000_000);
-        let mut m = CostMeter::new(1, dt, SimTime(1_000_000_000));
+        let mut m = CostMeter::new(1, dt);
         for k in 0..1500 {
-            m.add(SimTime(k * dt.0), &[0.2]);
+            m.add(&[0.2]);
+            if k == 999 {
+                m.close(SimTime(1_000_000_000));
+            }
         }
-        m.finish();
+        m.close(SimTime(1_500_000_000));
         assert_eq!(m.epochs().len(), 2);
         assert_eq!(m.epochs()[1].t_end, SimTime(1_500_000_000));
         assert!((m.epochs()[1].cost - 0.2).abs() < 1e-12);

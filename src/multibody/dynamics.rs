@@ -112,7 +112,7 @@ impl System {
         if self.rigid {
             for i in 0..state.omega.len() {
                 let w = state.omega[i];
-                self.ws.torque[i] = -w.cross(&(self.ws.inertia_world[i] * w));
+                self.ws.torque[i] = self.extra_torque[i] - w.cross(&(self.ws.inertia_world[i] * w));
             }
         }
     }

@@ -36,6 +36,8 @@ pub struct System {
     /// Extra external force per body [N], held constant over a step (used for border
     /// forces received from other partitions; zero on a monolithic run).
     pub extra_force: Vec<Vector3<f64>>,
+    /// Extra external torque per body [N·m] (rigid path only; empty on point masses).
+    pub extra_torque: Vec<Vector3<f64>>,
     pub(crate) mass: MassData,
     pub(crate) geo: Geometry,
     pub(crate) ws: Workspace,
@@ -127,6 +129,7 @@ impl System {
             integrator: scenario.integrator,
             dt: scenario.dt,
             extra_force: vec![v3(); nb],
+            extra_torque: vec![v3(); nr],
             mass,
             geo,
             ws: Workspace {
@@ -192,6 +195,45 @@ impl System {
         match self.stabilizer {
             Stabilizer::Smc { .. } => -state.z[link],
             Stabilizer::Baumgarte { .. } => -self.ws.z_alg[link],
+        }
+    }
+
+    /// Makes body `i` immovable (infinite mass and inertia): its acceleration is zero
+    /// and link forces do not move it (used for held ghosts).
+    pub fn set_immovable(&mut self, i: usize) {
+        self.mass.inv_mass[i] = 0.0;
+    }
+
+    /// Force [N] and torque [N·m] that link `l` exerts on its body `body` (which must be
+    /// one of its ends) in `state`, from the geometry of `state` and the multiplier
+    /// (SMC: the state's `z`; Baumgarte: the last evaluation's).
+    pub fn link_load_on(
+        &self,
+        state: &super::State,
+        l: usize,
+        body: usize,
+    ) -> (Vector3<f64>, Vector3<f64>) {
+        let link = &self.links[l];
+        let anchor = |i: usize, r: &Vector3<f64>| {
+            if self.rigid {
+                nalgebra::UnitQuaternion::new_normalize(state.q[i]) * r
+            } else {
+                Vector3::zeros()
+            }
+        };
+        let (ra, rb) = (
+            anchor(link.a, &link.anchor_a),
+            anchor(link.b, &link.anchor_b),
+        );
+        let n = (state.p[link.a] + ra - state.p[link.b] - rb).normalize();
+        let z = match self.stabilizer {
+            Stabilizer::Smc { .. } => state.z[l],
+            Stabilizer::Baumgarte { .. } => self.ws.z_alg[l],
+        };
+        if body == link.a {
+            (n * z, ra.cross(&n) * z)
+        } else {
+            (-n * z, -rb.cross(&n) * z)
         }
     }
 

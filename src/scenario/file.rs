@@ -92,6 +92,22 @@ pub struct ScenarioFile {
     /// What goes into trace.csv and the plots; defaults in [`OutputFile`].
     #[serde(default)]
     pub output: OutputFile,
+    /// The split of the model over computing nodes; default none (a monolithic run, one
+    /// node holding the whole model).
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub partition: Option<PartitionFile>,
+    /// The network model carrying the channels; default `{"kind": "ideal"}`.
+    #[serde(default)]
+    pub network: NetworkFile,
+    /// The communication channels between nodes; default none. Needs `partition`; with
+    /// a partition that has border links, every message must travel on exactly one
+    /// channel (an empty list counts as none).
+    #[serde(default)]
+    pub channels: Vec<ChannelFile>,
 }
 
 /// `integrator`: the time integrator of the `(x, v, z)` state.
@@ -419,4 +435,137 @@ impl Default for OutputFile {
             plot_bodies: None,
         }
     }
+}
+
+/// `partition`: which computing node holds each body, and who owns the border links
+/// (SPEC section 3). Exactly one of `nodes` or `"quadrants": true`.
+///
+/// Nodes are numbered from 1 in the file (node 0 is the TDMA server): the i-th list of
+/// `nodes` is node i + 1.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PartitionFile {
+    /// Body ids per node: every body in exactly one node, no node empty.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub nodes: Option<Vec<Vec<u32>>>,
+    /// `true`: split a `grid` model with even rows and cols into 2×2 blocks of bodies,
+    /// one node each. A 4×4 grid gives the thesis ring (node 1 = bodies 1, 2, 5, 6,
+    /// node 2 = 3, 4, 7, 8, node 3 = 11, 12, 15, 16, node 4 = 9, 10, 13, 14; each node
+    /// owns its border links toward the next node of the ring 1–2–3–4–1); any other grid
+    /// numbers the blocks row by row from the origin corner. Default `false`.
+    #[serde(default)]
+    pub quadrants: bool,
+    /// What a node does with the ghosts (far-end bodies of its border links); default
+    /// `"integrate"` (the thesis's ghost equations).
+    #[serde(default)]
+    pub ghosts: GhostsFile,
+    /// Owners of chosen border links, overriding the default rule (the thesis ring for
+    /// the 4-node quadrants, else the node of the link's body that comes first in file
+    /// order); default none.
+    #[serde(default)]
+    pub link_owners: Vec<LinkOwnerFile>,
+}
+
+/// `partition.ghosts`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GhostsFile {
+    /// `"integrate"` (default): ghosts are integrated like own bodies between arrivals,
+    /// as in the thesis.
+    #[default]
+    Integrate,
+    /// `"hold"`: a ghost stays at the last received state (zero-order hold).
+    Hold,
+}
+
+/// One entry of `partition.link_owners`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinkOwnerFile {
+    /// Link number (1-based, file order; a grid numbers its links row by row, each
+    /// body's +x link before its +y link); must be a border link.
+    pub link: usize,
+    /// Owning node (1-based): one of the two nodes holding the link's bodies.
+    pub node: usize,
+}
+
+/// `network.kind`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NetworkKind {
+    /// `"ideal"` (default): each channel samples every τ and delivers after its
+    /// latency, nothing lost (the thesis's chapter-3 reading).
+    #[default]
+    Ideal,
+}
+
+/// `network`: `{"kind": "ideal"}`.
+///
+/// Kept flat like [`StabilizerFile`] (a `kind` plus the keys of each kind, checked by
+/// validation), so that further network models add a variant and their keys here.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NetworkFile {
+    /// Which network model; required inside the section.
+    pub kind: NetworkKind,
+}
+
+/// `channels[].kinds` entries: what kind of data a channel carries.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DataKindFile {
+    /// `"state"`: body states `(x, ẋ)`, from a body's owner to the nodes ghosting it.
+    State,
+    /// `"force"`: border-link constraint forces, from the link's owner to the owner of
+    /// the ghosted body.
+    Force,
+}
+
+/// Default units per transfer k [1] (see [`ChannelFile::k`]).
+pub const DEFAULT_CHANNEL_K: f64 = 1.0;
+
+fn default_channel_k() -> f64 {
+    DEFAULT_CHANNEL_K
+}
+
+/// One entry of `channels`: a periodic channel (SPEC section 4).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ChannelFile {
+    /// Channel name, unique, of letters, digits and `_` (it becomes part of CSV column
+    /// names such as `tau_<name>_requested`); required.
+    pub name: String,
+    /// Sampling period τ [s], > 0, a whole number of `dt` steps; required.
+    pub tau: f64,
+    /// Delivery latency [s], ≥ 0, a whole number of nanoseconds; default τ (the thesis's
+    /// `x(t − τ)` reading), following τ when a controller changes it.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub latency: Option<f64>,
+    /// Units per transfer k [1], > 0 (bandwidth used is `Σ k/τ`); default 1 (thesis).
+    #[serde(default = "default_channel_k")]
+    pub k: f64,
+    /// Borders carried, as pairs of node numbers `[a, b]` (1-based, either order), each
+    /// a pair of nodes joined by at least one border link; default every border.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub borders: Option<Vec<[usize; 2]>>,
+    /// Kinds of data carried, `"state"` and/or `"force"`, non-empty, no repeats; default
+    /// both.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub kinds: Option<Vec<DataKindFile>>,
 }

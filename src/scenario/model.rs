@@ -167,6 +167,92 @@ pub struct OutputSpec {
     pub plot_bodies: Vec<usize>,
 }
 
+/// How a partition treats the far-end bodies of the border links it owns (SPEC section 3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GhostMode {
+    /// The node integrates its ghosts like its own bodies, driven by its own links and
+    /// the owner-side force carried in the state message; every arriving state
+    /// overwrites the ghost's position and velocity (default, thesis).
+    Integrate,
+    /// The ghost stays at the last received state (zero-order hold, zero acceleration).
+    Hold,
+}
+
+/// What a message carries (the `time` distribution routes by this).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum DataKind {
+    /// A body's state `(x, ẋ)` (plus the owner-side force), owner → ghosting node.
+    State,
+    /// A border link's constraint force on a ghosted body, link owner → body owner.
+    Force,
+}
+
+impl DataKind {
+    /// The name used in scenario files.
+    pub fn name(self) -> &'static str {
+        match self {
+            DataKind::State => "state",
+            DataKind::Force => "force",
+        }
+    }
+}
+
+/// The split of the model over computing nodes. Node indices are 0-based here; files,
+/// traces and messages name node `i` as `i + 1` (node 0 is the TDMA server).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PartitionSpec {
+    /// Number of computing nodes.
+    pub nodes: usize,
+    /// Node of each body (by body index).
+    pub node_of: Vec<usize>,
+    /// Node owning each link (by link index): the node of both ends for an internal
+    /// link; for a border link the scenario's override, the thesis ring rule for the
+    /// 4-node quadrant layout, or else the node of the lower-numbered (file order) body.
+    pub link_owner: Vec<usize>,
+    /// Ghost treatment.
+    pub ghosts: GhostMode,
+}
+
+/// A periodic communication channel (SPEC section 4).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChannelSpec {
+    /// Name used in epochs.csv columns (`tau_<name>_requested`).
+    pub name: String,
+    /// Sampling period τ (the thesis's "time delay"); a whole number of `dt`.
+    pub tau: SimTime,
+    /// Delivery latency; `None` = equal to τ (the thesis's `x(t − τ)` reading), and
+    /// follows τ when a controller changes it.
+    pub latency: Option<SimTime>,
+    /// Units per transfer k (bandwidth used is `Σ k/τ`) [1].
+    pub k: f64,
+    /// Borders carried (unordered node pairs, 0-based, smaller first); `None` = all.
+    pub borders: Option<Vec<(usize, usize)>>,
+    /// Kinds of data carried; `None` = both.
+    pub kinds: Option<Vec<DataKind>>,
+}
+
+impl ChannelSpec {
+    /// Whether a message of `kind` crossing the border between nodes `a` and `b` travels
+    /// on this channel.
+    pub fn carries(&self, kind: DataKind, a: usize, b: usize) -> bool {
+        let border = (a.min(b), a.max(b));
+        self.borders.as_ref().is_none_or(|bs| bs.contains(&border))
+            && self.kinds.as_ref().is_none_or(|ks| ks.contains(&kind))
+    }
+
+    /// The latency in force for period `tau`.
+    pub fn latency_for(&self, tau: SimTime) -> SimTime {
+        self.latency.unwrap_or(tau)
+    }
+}
+
+/// The network model carrying the channels.
+#[derive(Debug, Clone, PartialEq)]
+pub enum NetworkSpec {
+    /// Ideal channels: sample every τ, deliver after the latency, nothing lost.
+    Ideal,
+}
+
 /// A validated scenario.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Scenario {
@@ -200,4 +286,10 @@ pub struct Scenario {
     pub measurement_period: SimTime,
     /// Output options.
     pub output: OutputSpec,
+    /// The partitioning; `None` = one node holding the whole model (monolithic).
+    pub partition: Option<PartitionSpec>,
+    /// Network model.
+    pub network: NetworkSpec,
+    /// Channels (empty on a monolithic run).
+    pub channels: Vec<ChannelSpec>,
 }

@@ -13,9 +13,15 @@
 //!
 //! Times are converted to integer nanoseconds ([`SimTime`]) here, once; `duration` must be
 //! a whole number of `dt` steps in nanoseconds, so the step count is exact.
+//!
+//! The stages run in file-dependency order: the model (`bodies`), whose ids the later
+//! sections name; then `partition`, which needs the bodies and links; then `network`
+//! and `channels`, whose routes are the partition's borders.
 
 mod bodies;
+mod channels;
 pub(super) mod checks;
+mod partition;
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -23,7 +29,11 @@ use std::path::Path;
 use serde_json::error::Category;
 
 use self::bodies::{model, Ids, Model};
-use self::checks::{finite, foreign, non_negative, num, positive, required, time, vector};
+use self::channels::{channels, network};
+use self::checks::{
+    finite, foreign, non_negative, num, positive, required, time, vector, whole_nanos,
+};
+use self::partition::partition;
 use super::file::{
     ForceFile, IntegratorFile, MeasurementFile, OutputFile, ScenarioFile, SolverFile, SolverKind,
     StabilizerFile, StabilizerKind, DEFAULT_CG_MAX_ITERATIONS, DEFAULT_CG_TOLERANCE,
@@ -151,6 +161,18 @@ pub fn validate(file: ScenarioFile) -> Result<Scenario> {
     let max_violation = positive("divergence.max_violation", file.divergence.max_violation)?;
     let measurement_period = measurement(&file.measurement, dt, duration)?;
     let output = output(&file.output, &ids, bodies.len())?;
+    let partition = match &file.partition {
+        Some(p) => Some(partition(
+            p,
+            file.model.grid.as_ref(),
+            &ids,
+            &bodies,
+            &links,
+        )?),
+        None => None,
+    };
+    let network = network(&file.network)?;
+    let channels = channels(&file.channels, partition.as_ref(), &links, dt)?;
 
     Ok(Scenario {
         name: file.name,
@@ -168,6 +190,9 @@ pub fn validate(file: ScenarioFile) -> Result<Scenario> {
         max_violation,
         measurement_period,
         output,
+        partition,
+        network,
+        channels,
     })
 }
 
@@ -182,18 +207,7 @@ fn step_and_duration(dt_secs: f64, duration_secs: f64) -> Result<(SimTime, SimTi
             format!("must be at least 1 ns (got {} s)", num(dt_secs)),
         ));
     }
-    // Rounding to the nanosecond must not change the step noticeably (1.5 ns → 2 ns
-    // would be a silent 33 % change); 1 ppb leaves room for decimal round-off only.
-    let exact_ns = dt_secs * 1e9;
-    if (exact_ns - dt.as_nanos() as f64).abs() > 1e-9 * exact_ns {
-        return Err(Error::invalid(
-            "dt",
-            format!(
-                "must be a whole number of nanoseconds (got {} s)",
-                num(dt_secs)
-            ),
-        ));
-    }
+    whole_nanos("dt", dt_secs)?;
     positive("duration", duration_secs)?;
     let duration = time("duration", duration_secs)?;
     if dt > duration {

@@ -3,8 +3,7 @@
 
 use std::io::Write;
 
-use crate::kernel::SimTime;
-use crate::multibody::State;
+use crate::cosim::{Observer, StepValues};
 use crate::output::AtomicFile;
 use crate::report::Series;
 
@@ -29,22 +28,6 @@ pub struct Recorder {
     link_series: Vec<Vec<f64>>,
     envelope: Vec<f64>,
     body_series: Vec<[Vec<f64>; 3]>,
-}
-
-/// The values of one step, as the recorder needs them.
-pub struct StepValues<'a> {
-    /// Step index k (t = k dt).
-    pub step: u64,
-    /// Time of the step.
-    pub time: SimTime,
-    /// Whether this is the last step of the run (always written).
-    pub last: bool,
-    /// Constraint values w per link [m].
-    pub w: &'a [f64],
-    /// Link tensions f per link [N].
-    pub f: &'a [f64],
-    /// The state at `time`.
-    pub state: &'a State,
 }
 
 impl Recorder {
@@ -100,10 +83,10 @@ impl Recorder {
         self.digest.time(s.time.as_nanos());
         self.digest.values(s.w);
         self.digest.values(s.f);
-        for p in &s.state.p {
+        for p in s.p {
             self.digest.values(p.as_slice());
         }
-        for v in &s.state.v {
+        for v in s.v {
             self.digest.values(v.as_slice());
         }
         for &w in s.w {
@@ -122,7 +105,7 @@ impl Recorder {
             .push(s.w.iter().fold(0.0, |m: f64, w| m.max(w.abs())));
         for (series, &(i, _)) in self.body_series.iter_mut().zip(&self.plot_bodies) {
             for (ax, series) in series.iter_mut().enumerate() {
-                series.push(s.state.p[i][ax]);
+                series.push(s.p[i][ax]);
             }
         }
         let Some(file) = &mut self.file else {
@@ -135,7 +118,7 @@ impl Recorder {
             let _ = write!(self.line, ",{x}");
         }
         for &i in &self.trace_bodies {
-            let (p, v) = (s.state.p[i], s.state.v[i]);
+            let (p, v) = (s.p[i], s.v[i]);
             for x in p.iter().chain(v.iter()) {
                 let _ = write!(self.line, ",{x}");
             }
@@ -197,6 +180,12 @@ impl Recorder {
             }
         }
         out
+    }
+}
+
+impl Observer for Recorder {
+    fn on_step(&mut self, values: &StepValues) -> std::io::Result<()> {
+        self.record(values)
     }
 }
 

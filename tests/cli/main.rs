@@ -240,7 +240,7 @@ fn divergence_exits_3_names_time_node_and_link_and_keeps_the_trace() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(3), "{err}");
     assert!(err.contains("diverged at t = "), "{err}");
-    assert!(err.contains("node 0"), "{err}");
+    assert!(err.contains("on node 1"), "{err}");
     assert!(err.contains("link L"), "{err}");
     let s = summary(&out);
     assert_eq!(s["status"], json!("diverged"));

@@ -6,8 +6,9 @@
 //! tables are exempt from rustfmt to keep it that way).
 
 use dsmcosim::scenario::file::{
-    BodyFile, BodyModelFile, DivergenceFile, ForceFile, GridFile, IntegratorFile, LinkFile,
-    MeasurementFile, ModelFile, OutputFile, ScenarioFile, SolverFile, SolverKind, StabilizerFile,
+    BodyFile, BodyModelFile, ChannelFile, DataKindFile, DivergenceFile, ForceFile, GhostsFile,
+    GridFile, IntegratorFile, LinkFile, LinkOwnerFile, MeasurementFile, ModelFile, NetworkFile,
+    OutputFile, PartitionFile, ScenarioFile, SolverFile, SolverKind, StabilizerFile,
     StabilizerKind,
 };
 use dsmcosim::scenario::validate::{parse_file, validate};
@@ -58,6 +59,28 @@ fn grid_base() -> Value {
     })
 }
 
+/// The thesis grid in quadrants (ring 1–2–3–4–1), states on `tau1`, forces on `tau2`.
+fn part_base() -> Value {
+    let mut doc = grid_base();
+    doc["partition"] = json!({"quadrants": true, "ghosts": "integrate"});
+    doc["network"] = json!({"kind": "ideal"});
+    doc["channels"] = json!([
+        {"name": "tau1", "tau": 0.005, "latency": 0.005, "k": 1.0, "kinds": ["state"]},
+        {"name": "tau2", "tau": 0.01, "kinds": ["force"]}
+    ]);
+    doc
+}
+
+/// The thesis layout as explicit node lists (same nodes as the quadrants).
+fn thesis_nodes() -> Value {
+    json!([
+        [1, 2, 5, 6],
+        [3, 4, 7, 8],
+        [11, 12, 15, 16],
+        [9, 10, 13, 14]
+    ])
+}
+
 /// Sets (or adds) the value at a JSON pointer such as `/model/bodies/0/mass`.
 fn put(mut doc: Value, pointer: &str, value: Value) -> Value {
     let (parent, key) = pointer.rsplit_once('/').expect("pointer starts with /");
@@ -82,9 +105,23 @@ fn set_grid(pointer: &str, value: Value) -> String {
     put(grid_base(), pointer, value).to_string()
 }
 
+/// `part_base()` with one value set.
+fn set_part(pointer: &str, value: Value) -> String {
+    put(part_base(), pointer, value).to_string()
+}
+
 /// `base()` with one key removed.
 fn remove(pointer: &str) -> String {
-    let mut doc = base();
+    remove_from(base(), pointer)
+}
+
+/// `part_base()` with one key removed.
+fn remove_part(pointer: &str) -> String {
+    remove_from(part_base(), pointer)
+}
+
+/// `doc` with one key removed.
+fn remove_from(mut doc: Value, pointer: &str) -> String {
     let (parent, key) = pointer.rsplit_once('/').expect("pointer starts with /");
     let removed = match doc.pointer_mut(parent).expect("parent exists") {
         Value::Object(map) => map.remove(key),
@@ -270,8 +307,10 @@ fn non_finite_values_built_in_code_are_rejected() {
 #[test]
 #[rustfmt::skip]
 fn unknown_keys_are_rejected() {
-    invalid(set("/partition", json!({})), "partition", "unknown field `partition`");
-    invalid(set("/network", json!({})), "network", "unknown field `network`");
+    invalid(set_part("/partition/colour", json!(1)), "partition.colour", "unknown field `colour`");
+    invalid(set_part("/partition/link_owners", json!([{"link": 3, "node": 2, "why": 1}])), "partition.link_owners[0].why", "unknown field");
+    invalid(set_part("/network/slots", json!([])), "network.slots", "unknown field `slots`");
+    invalid(set_part("/channels/1/period", json!(0.01)), "channels[1].period", "unknown field");
     invalid(set("/controller", json!({})), "controller", "unknown field");
     invalid(set("/model/bodies/1/colour", json!(1)), "model.bodies[1].colour", "unknown field");
     invalid(set("/model/links/0/stiffness", json!(1)), "model.links[0].stiffness", "unknown");
@@ -312,6 +351,22 @@ fn wrong_types_are_rejected() {
     invalid(remove("/forces/0/amplitude"), "forces[0]", "missing field `amplitude`");
     invalid(remove("/stabilizer/kind"), "stabilizer", "missing field `kind`");
     invalid(remove("/seed"), "top level", "missing field `seed`");
+    invalid(set_part("/partition/ghosts", json!("freeze")), "partition.ghosts", "unknown variant `freeze`");
+    invalid(set_part("/partition/quadrants", json!("yes")), "partition.quadrants", "invalid type");
+    invalid(set_part("/partition/nodes", json!([[1, -2]])), "partition.nodes[0][1]", "expected u32");
+    invalid(set_part("/partition/nodes", json!([1, 2])), "partition.nodes[0]", "invalid type");
+    invalid(set_part("/partition/link_owners", json!([{"link": 3}])), "partition.link_owners[0]", "missing field `node`");
+    invalid(set_part("/network/kind", json!("carrier_pigeon")), "network.kind", "unknown variant");
+    invalid(set_part("/network", json!({})), "network", "missing field `kind`");
+    invalid(set_part("/channels/0/kinds", json!(["state", "torque"])), "channels[0].kinds[1]", "unknown variant `torque`");
+    invalid(set_part("/channels/0/borders", json!([[1]])), "channels[0].borders[0]", "length 1");
+    // serde_json reports a too-long fixed array as trailing characters, at the field.
+    parse_error(&set_part("/channels/0/borders", json!([[1, 2, 3]])), "channels[0].borders[0]", "trailing characters");
+    invalid(set_part("/channels/0/borders", json!([[1, -2]])), "channels[0].borders[0][1]", "expected usize");
+    invalid(set_part("/channels/0/name", json!(1)), "channels[0].name", "invalid type");
+    invalid(set_part("/channels", json!({"name": "tau1"})), "channels", "invalid type");
+    invalid(remove_part("/channels/1/tau"), "channels[1]", "missing field `tau`");
+    invalid(remove_part("/channels/0/name"), "channels[0]", "missing field `name`");
 }
 
 #[test]
@@ -329,6 +384,19 @@ fn null_is_never_a_default() {
     invalid(set("/measurement/period", Value::Null), "measurement.period", "null");
     invalid(set("/output/plot_bodies", Value::Null), "output.plot_bodies", "null");
     invalid(set("/model/grid", Value::Null), "model.grid", "null");
+    invalid(set_part("/partition", Value::Null), "partition", "null");
+    invalid(set_part("/partition/nodes", Value::Null), "partition.nodes", "null");
+    invalid(set_part("/partition/quadrants", Value::Null), "partition.quadrants", "null");
+    // serde_json reads a unit variant from `null` as a syntax error, still at the field.
+    parse_error(&set_part("/partition/ghosts", Value::Null), "partition.ghosts", "expected value");
+    parse_error(&set_part("/network/kind", Value::Null), "network.kind", "expected value");
+    invalid(set_part("/partition/link_owners", Value::Null), "partition.link_owners", "null");
+    invalid(set_part("/network", Value::Null), "network", "null");
+    invalid(set_part("/channels", Value::Null), "channels", "null");
+    invalid(set_part("/channels/0/latency", Value::Null), "channels[0].latency", "null");
+    invalid(set_part("/channels/0/k", Value::Null), "channels[0].k", "null");
+    invalid(set_part("/channels/0/borders", Value::Null), "channels[0].borders", "null");
+    invalid(set_part("/channels/1/kinds", Value::Null), "channels[1].kinds", "null");
 }
 
 #[test]
@@ -458,6 +526,128 @@ fn stabilizer_and_solver_sections_are_checked() {
     invalid(set("/solver/max_iterations", json!(0)), "solver.max_iterations", "must be ≥ 1 (got 0)");
     invalid(set("/solver/tolerance", json!(-1e-9)), "solver.tolerance", "must be ≥ 0 (got -1e-9)");
     invalid(set("/solver", json!({"kind": "cholesky", "tolerance": 1e-6})), "solver.tolerance", "not a key of kind \"cholesky\"");
+}
+
+#[test]
+fn partitioned_bases_are_valid() {
+    let s = parse_str(&part_base().to_string(), "part.json").unwrap();
+    let p = s.partition.as_ref().unwrap();
+    assert_eq!((p.nodes, s.channels.len()), (4, 2));
+    // The thesis layout written out, with the ring's owners for the four border links
+    // the general rule gives to the other node (links 9, 11, 17, 23).
+    let owners = json!([{"link": 9, "node": 4}, {"link": 11, "node": 4},
+                        {"link": 17, "node": 3}, {"link": 23, "node": 3}]);
+    let explicit = set_part(
+        "/partition",
+        json!({"nodes": thesis_nodes(), "link_owners": owners}),
+    );
+    assert_eq!(parse_str(&explicit, "e.json").unwrap(), s);
+    // One node: no border links, no channels needed.
+    let one = put(base(), "/partition", json!({"nodes": [[3, 1, 2]]})).to_string();
+    let one = parse_str(&one, "one.json").unwrap();
+    assert_eq!(one.partition.unwrap().node_of, vec![0, 0, 0]);
+    // The thesis space distribution.
+    let space = set_part(
+        "/channels",
+        json!([{"name": "tau1", "tau": 0.005, "borders": [[1, 2], [1, 4]]},
+               {"name": "tau2", "tau": 0.005, "borders": [[3, 2], [3, 4]], "k": 2}]),
+    );
+    let space = parse_str(&space, "space.json").unwrap();
+    assert_eq!(space.channels[1].borders, Some(vec![(1, 2), (2, 3)]));
+    assert_eq!(space.channels[1].k, 2.0);
+}
+
+#[test]
+#[rustfmt::skip]
+fn partitions_are_checked() {
+    invalid(set_part("/partition/nodes", thesis_nodes()), "partition", "not both");
+    invalid(set_part("/partition", json!({"ghosts": "hold"})), "partition", "needs either `nodes` or");
+    invalid(set_part("/partition", json!({"nodes": thesis_nodes(), "quadrants": false, "colour": 1})), "partition.colour", "unknown field");
+    invalid(set("/partition", json!({"quadrants": true})), "partition.quadrants", "needs a `grid` model (got explicit `bodies`)");
+    invalid(put(part_base(), "/model/grid/rows", json!(3)).to_string(), "partition.quadrants", "got a 3×4 grid");
+    invalid(put(part_base(), "/model/grid/cols", json!(5)).to_string(), "partition.quadrants", "even number of rows and cols (got a 4×5 grid)");
+    invalid(set("/partition", json!({"nodes": []})), "partition.nodes", "at least one node");
+    invalid(set("/partition", json!({"nodes": [[1, 2], [], [3]]})), "partition.nodes[1]", "node 2 is empty");
+    invalid(set("/partition", json!({"nodes": [[1, 2], [3, 99]]})), "partition.nodes[1][1]", "no body with id 99");
+    invalid(set("/partition", json!({"nodes": [[1, 2], [2, 3]]})), "partition.nodes[1][0]", "body 2 is already in node 1");
+    invalid(set("/partition", json!({"nodes": [[1], [3]]})), "partition.nodes", "body 2 is in no node");
+    invalid(set_part("/partition", json!({"nodes": [[1, 2, 5, 6, 7], [3, 4, 8], [11, 7, 12, 15, 16], [9, 10, 13, 14]]})), "partition.nodes[2][1]", "body 7 is already in node 1");
+    invalid(set_part("/partition", json!({"nodes": [[1, 2, 5, 6], [3, 4, 7, 8], [11, 12, 15, 16], [9, 10, 14]]})), "partition.nodes", "body 13 is in no node");
+    invalid(set_part("/partition", json!({"nodes": [[1, 2, 5, 6], [3, 4, 7, 8]]})), "partition.nodes", "body 9 is in no node (nor are 7 more bodies)");
+}
+
+#[test]
+#[rustfmt::skip]
+fn link_owners_are_checked() {
+    let owners = |o: Value| set_part("/partition/link_owners", o);
+    invalid(owners(json!([{"link": 0, "node": 1}])), "partition.link_owners[0].link", "no link 0 (links are numbered 1 to 24)");
+    invalid(owners(json!([{"link": 25, "node": 1}])), "partition.link_owners[0].link", "no link 25");
+    invalid(owners(json!([{"link": 1, "node": 1}])), "partition.link_owners[0].link", "link 1 (bodies 1–2) lies inside node 1");
+    invalid(owners(json!([{"link": 11, "node": 3}])), "partition.link_owners[0].node", "must be node 1 or node 4, the nodes of link 11 (bodies 6–10) (got 3)");
+    invalid(owners(json!([{"link": 11, "node": 0}])), "partition.link_owners[0].node", "(got 0)");
+    invalid(owners(json!([{"link": 11, "node": 4}, {"link": 3, "node": 2}, {"link": 11, "node": 1}])), "partition.link_owners[2].link", "link 11 is given an owner twice (also partition.link_owners[0])");
+    let no_links = put(base(), "/model/links", json!([]));
+    let no_links = put(no_links, "/partition", json!({"nodes": [[1], [2, 3]], "link_owners": [{"link": 1, "node": 1}]}));
+    invalid(no_links.to_string(), "partition.link_owners[0].link", "no link 1 (the model has no links)");
+}
+
+#[test]
+#[rustfmt::skip]
+fn channel_values_are_checked() {
+    invalid(set("/channels", json!([{"name": "a", "tau": 0.01}])), "channels", "needs a `partition` section (got 1 channel(s)");
+    invalid(remove_part("/channels"), "channels", "a partition with border links needs channels (got none; 8 border links join 4 pairs of nodes)");
+    invalid(set_part("/channels", json!([])), "channels", "needs channels");
+    invalid(set_part("/channels/0/name", json!("")), "channels[0].name", "must not be empty");
+    invalid(set_part("/channels/1/name", json!("tau 2")), "channels[1].name", "letters, digits and _ (got \"tau 2\")");
+    invalid(set_part("/channels/1/name", json!("τ2")), "channels[1].name", "letters, digits and _");
+    invalid(set_part("/channels/1/name", json!("tau1")), "channels[1].name", "duplicate name \"tau1\" (also channels[0].name)");
+    invalid(set_part("/channels/0/tau", json!(0)), "channels[0].tau", "must be > 0 (got 0)");
+    invalid(set_part("/channels/0/tau", json!(-0.005)), "channels[0].tau", "must be > 0 (got -0.005)");
+    invalid(set_part("/channels/0/tau", json!(0.0015)), "channels[0].tau", "must be a whole number of dt steps (got 0.0015 s with dt 0.001 s)");
+    invalid(set_part("/channels/0/tau", json!(0.0001)), "channels[0].tau", "whole number of dt steps");
+    invalid(set_part("/channels/1/tau", json!(1e-12)), "channels[1].tau", "whole number of dt steps");
+    invalid(set_part("/channels/0/latency", json!(-0.001)), "channels[0].latency", "must be ≥ 0 (got -0.001)");
+    invalid(set_part("/channels/0/latency", json!(1.5e-9)), "channels[0].latency", "whole number of nanoseconds");
+    invalid(set_part("/channels/1/k", json!(0)), "channels[1].k", "must be > 0 (got 0)");
+    invalid(set_part("/channels/1/k", json!(-1)), "channels[1].k", "got -1");
+    invalid(set_part("/channels/0/kinds", json!([])), "channels[0].kinds", "at least one kind");
+    invalid(set_part("/channels/0/kinds", json!(["state", "state"])), "channels[0].kinds[1]", "\"state\" is listed twice");
+}
+
+#[test]
+#[rustfmt::skip]
+fn channel_borders_are_checked() {
+    let borders = |b: Value| set_part("/channels/0/borders", b);
+    invalid(borders(json!([])), "channels[0].borders", "at least one border");
+    invalid(borders(json!([[1, 3]])), "channels[0].borders[0]", "nodes 1 and 3 share no border link");
+    invalid(borders(json!([[1, 2], [4, 2]])), "channels[0].borders[1]", "nodes 4 and 2 share no border link");
+    invalid(borders(json!([[1, 5]])), "channels[0].borders[0]", "no node 5 (the partition has nodes 1 to 4)");
+    invalid(borders(json!([[0, 1]])), "channels[0].borders[0]", "no node 0");
+    invalid(borders(json!([[2, 2]])), "channels[0].borders[0]", "two different nodes (got [2, 2])");
+    invalid(borders(json!([[1, 2], [2, 3], [2, 1]])), "channels[0].borders[2]", "border 1–2 is listed twice (also channels[0].borders[0])");
+}
+
+#[test]
+#[rustfmt::skip]
+fn every_message_travels_on_exactly_one_channel() {
+    // Forces have no channel once tau2 is gone.
+    let mut doc = part_base();
+    doc["channels"].as_array_mut().unwrap().pop();
+    invalid(doc.to_string(), "channels", "no channel carries force messages across border 1–2");
+    // tau2 carries both kinds: states would travel on tau1 and tau2.
+    invalid(remove_part("/channels/1/kinds"), "channels", "state messages across border 1–2 would travel on both channels[0] \"tau1\" and channels[1] \"tau2\"");
+    // Space distribution with border 3–4 left out.
+    let space = json!([{"name": "tau1", "tau": 0.005, "borders": [[1, 2], [1, 4]]},
+                       {"name": "tau2", "tau": 0.01, "borders": [[2, 3]]}]);
+    invalid(set_part("/channels", space), "channels", "no channel carries state messages across border 3–4");
+    let split = json!([{"name": "a", "tau": 0.005, "borders": [[1, 2], [1, 4]], "kinds": ["state"]},
+                       {"name": "b", "tau": 0.005, "kinds": ["force"]},
+                       {"name": "c", "tau": 0.005, "borders": [[2, 3], [3, 4]], "kinds": ["state"]}]);
+    assert!(parse_str(&set_part("/channels", split), "split.json").is_ok());
+    // A channel on a partition without border links carries nothing.
+    let one = put(base(), "/partition", json!({"nodes": [[1, 2, 3]]}));
+    let one = put(one, "/channels", json!([{"name": "idle", "tau": 0.01}])).to_string();
+    invalid(one, "channels[0]", "channel \"idle\" carries no message (the partition has no border links)");
 }
 
 #[test]
@@ -598,6 +788,85 @@ fn id_list(ids: Vec<u32>) -> impl Strategy<Value = Option<Vec<u32>>> {
     prop::option::of(prop::sample::subsequence(ids, 0..=n).prop_shuffle())
 }
 
+/// A drawn partition: a node (0..3) per body, ghosts held, channels split by kind, τ in
+/// steps, latency in µs, and whether the first border link gets an override owner.
+type PartitionDraw = (Vec<usize>, bool, bool, u64, Option<u64>, bool);
+
+fn partition_draw(bodies: usize) -> impl Strategy<Value = Option<PartitionDraw>> {
+    prop::option::of((
+        prop::collection::vec(0usize..3, bodies),
+        any::<bool>(),
+        any::<bool>(),
+        1u64..20,
+        prop::option::of(0u64..50_000),
+        any::<bool>(),
+    ))
+}
+
+/// The `partition` and `channels` sections of a drawn partition: empty nodes dropped,
+/// one channel for everything (or one per kind) when there are border links.
+fn partition_sections(
+    draw: Option<PartitionDraw>,
+    bodies: &[BodyFile],
+    links: &[LinkFile],
+    dt_ns: u64,
+) -> (Option<PartitionFile>, Vec<ChannelFile>) {
+    let Some((drawn, hold, by_kind, tau_steps, latency_us, override_first)) = draw else {
+        return (None, Vec::new());
+    };
+    let mut nodes: Vec<Vec<u32>> = vec![Vec::new(); 3];
+    for (b, &n) in bodies.iter().zip(&drawn) {
+        nodes[n].push(b.id);
+    }
+    nodes.retain(|n| !n.is_empty());
+    // File position and node (0-based, after dropping empty nodes) of a body id.
+    let index = |id: u32| bodies.iter().position(|b| b.id == id).unwrap();
+    let node = |id: u32| nodes.iter().position(|n| n.contains(&id)).unwrap();
+    let border: Vec<usize> = (0..links.len())
+        .filter(|&k| node(links[k].a) != node(links[k].b))
+        .collect();
+    let link_owners = match border.first() {
+        Some(&k) if override_first => {
+            let l = &links[k];
+            // The general rule gives the link to the node of its first body in file
+            // order; hand it to the other one.
+            let other = if index(l.a) < index(l.b) { l.b } else { l.a };
+            vec![LinkOwnerFile {
+                link: k + 1,
+                node: node(other) + 1,
+            }]
+        }
+        _ => Vec::new(),
+    };
+    let channel = |name: &str, kinds: Option<Vec<DataKindFile>>| ChannelFile {
+        name: name.to_string(),
+        tau: (dt_ns * tau_steps) as f64 / 1e9,
+        latency: latency_us.map(|us| us as f64 / 1e6),
+        k: 1.0,
+        borders: None,
+        kinds,
+    };
+    let channels = match (border.is_empty(), by_kind) {
+        (true, _) => Vec::new(),
+        (false, false) => vec![channel("all", None)],
+        (false, true) => vec![
+            channel("states", Some(vec![DataKindFile::State])),
+            channel("forces", Some(vec![DataKindFile::Force])),
+        ],
+    };
+    let partition = PartitionFile {
+        nodes: Some(nodes),
+        quadrants: false,
+        ghosts: if hold {
+            GhostsFile::Hold
+        } else {
+            GhostsFile::Integrate
+        },
+        link_owners,
+    };
+    (Some(partition), channels)
+}
+
 /// A random valid explicit scenario.
 fn scenario() -> impl Strategy<Value = ScenarioFile> {
     // Distinct ids in random order.
@@ -633,8 +902,9 @@ fn scenario() -> impl Strategy<Value = ScenarioFile> {
                 prop::bool::ANY,
                 1u64..100,
                 id_list(ids.clone()),
-                id_list(ids),
+                id_list(ids.clone()),
             ),
+            partition_draw(ids.len()),
         )
     })
     .prop_map(
@@ -643,8 +913,10 @@ fn scenario() -> impl Strategy<Value = ScenarioFile> {
             (seed, dt_ns, steps, period_steps),
             (integrator, stabilizer, solver, body_model),
             (max_violation, explicit_period, decimation, trace_bodies, plot_bodies),
+            partition_draw,
         )| {
             let secs = |ns: u64| ns as f64 / 1e9;
+            let (partition, channels) = partition_sections(partition_draw, &bodies, &links, dt_ns);
             ScenarioFile {
                 name: format!("random {seed}"),
                 seed,
@@ -669,6 +941,9 @@ fn scenario() -> impl Strategy<Value = ScenarioFile> {
                     trace_bodies,
                     plot_bodies,
                 },
+                partition,
+                network: NetworkFile::default(),
+                channels,
             }
         },
     )

@@ -83,6 +83,24 @@ pub(super) fn time(path: &str, secs: f64) -> Result<SimTime> {
     })
 }
 
+/// Seconds ≥ 0 as a whole number of nanoseconds. Rounding to the nanosecond must not
+/// change the value noticeably (1.5 ns → 2 ns would be a silent 33 % change); 1 ppb
+/// leaves room for decimal round-off only.
+pub(super) fn whole_nanos(path: &str, secs: f64) -> Result<SimTime> {
+    let t = time(path, secs)?;
+    let exact_ns = secs * 1e9;
+    if (exact_ns - t.as_nanos() as f64).abs() > 1e-9 * exact_ns {
+        return Err(Error::invalid(
+            path,
+            format!(
+                "must be a whole number of nanoseconds (got {} s)",
+                num(secs)
+            ),
+        ));
+    }
+    Ok(t)
+}
+
 /// A required key of one kind of a section, absent from the file.
 pub(super) fn required(path: &str, kind: &str) -> Error {
     Error::invalid(path, format!("is required for kind \"{kind}\""))
@@ -124,5 +142,11 @@ mod tests {
         );
         assert_eq!(time("t", 0.001).unwrap(), SimTime(1_000_000));
         assert!(time("t", 1e11).is_err());
+        assert_eq!(whole_nanos("l", 0.0).unwrap(), SimTime::ZERO);
+        assert_eq!(whole_nanos("l", 0.005).unwrap(), SimTime(5_000_000));
+        assert_eq!(
+            whole_nanos("l", 1.5e-9).unwrap_err().to_string(),
+            "l: must be a whole number of nanoseconds (got 1.5e-9 s)"
+        );
     }
 }

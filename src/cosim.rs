@@ -1,0 +1,21 @@
+//! The co-simulation world: partitions stepping in lock-step, channels carrying their
+//! messages, measurement windows — all ordered by the event kernel.
+//!
+//! ```text
+//!  time t:  Measurement(t)   close the window ending at t (cost, τ, bandwidth)
+//!           Sample(c)        channel c samples its routes' values at t and schedules
+//!                            Delivery(t + latency); next Sample(c) at t + τ_c
+//!           Delivery(msg)    the receiver overwrites a ghost / holds a border force
+//!           PartitionStep    every node: rates at t → check → record → step to t + dt
+//! ```
+//!
+//! Within a [`EventClass`] at equal time events leave FIFO, so channels sample in
+//! channel order and messages arrive in the order they were sent. Nodes step in node
+//! order inside one `PartitionStep` event; they share nothing during a step, so the
+//! order cannot change a bit of the result.
+
+pub mod event;
+pub mod world;
+
+pub use event::Event;
+pub use world::{CoSim, EpochRecord, Observer, StepValues};

@@ -1,0 +1,435 @@
+//! The [`CoSim`] world and its event handlers.
+
+use std::sync::Arc;
+
+use nalgebra::Vector3;
+
+use super::Event;
+use crate::control::CostMeter;
+use crate::error::{Divergence, Error, Place, Result};
+use crate::kernel::{EventClass, Kernel, SimTime};
+use crate::multibody::dynamics::EvalError;
+use crate::network::{Channel, Message};
+use crate::partition::{Layout, Node};
+use crate::scenario::model::{DataKind, Scenario};
+
+/// The values of one step, as observers (trace recorder, digest) see them: the whole
+/// model, gathered from the nodes that own each link and body.
+pub struct StepValues<'a> {
+    /// Step index k (t = k dt).
+    pub step: u64,
+    /// Time of the step.
+    pub time: SimTime,
+    /// Whether this is the last step of the run.
+    pub last: bool,
+    /// Constraint values w per link [m].
+    pub w: &'a [f64],
+    /// Link tensions f per link [N] (positive when pulling the bodies together).
+    pub f: &'a [f64],
+    /// Body positions [m].
+    pub p: &'a [Vector3<f64>],
+    /// Body velocities [m/s].
+    pub v: &'a [Vector3<f64>],
+}
+
+/// Something that watches every step (the recorder; nothing for a what-if fork).
+pub trait Observer {
+    /// Called once per step with the values at the step's start.
+    fn on_step(&mut self, values: &StepValues) -> std::io::Result<()>;
+}
+
+/// A watcher that watches nothing.
+impl Observer for () {
+    fn on_step(&mut self, _: &StepValues) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+/// One closed measurement window with the network settings in force over it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EpochRecord {
+    /// Window start.
+    pub t_start: SimTime,
+    /// Window end.
+    pub t_end: SimTime,
+    /// Cost C over the window [m].
+    pub cost: f64,
+    /// Requested and achieved period per channel.
+    pub taus: Vec<(SimTime, SimTime)>,
+    /// Bandwidth used `Σ k/τ` [units/s].
+    pub bandwidth: f64,
+}
+
+/// The whole co-simulation. `Clone` is a fork: the clone continues independently and
+/// bit-identically to the original.
+#[derive(Debug, Clone)]
+pub struct CoSim {
+    scenario: Arc<Scenario>,
+    layout: Arc<Layout>,
+    kernel: Kernel<Event>,
+    nodes: Vec<Node>,
+    channels: Vec<Channel>,
+    meter: CostMeter,
+    epochs: Vec<EpochRecord>,
+    /// (node, local index) holding each link's values.
+    link_home: Vec<(usize, usize)>,
+    /// (node, local index) of each body's owner copy.
+    body_home: Vec<(usize, usize)>,
+    w: Vec<f64>,
+    f: Vec<f64>,
+    p: Vec<Vector3<f64>>,
+    v: Vec<Vector3<f64>>,
+    steps_done: u64,
+    messages: u64,
+    events: u64,
+    max_violation: f64,
+}
+
+impl CoSim {
+    /// Builds the world of a validated scenario, with its first events scheduled.
+    pub fn new(scenario: &Scenario) -> CoSim {
+        let layout = Layout::new(scenario);
+        let nodes: Vec<Node> = (0..layout.nodes)
+            .map(|n| Node::new(scenario, &layout, n))
+            .collect();
+        let channels: Vec<Channel> = scenario
+            .channels
+            .iter()
+            .map(|c| Channel::new(c, &layout.routes))
+            .collect();
+        let mut link_home = vec![(0, 0); scenario.links.len()];
+        let mut body_home = vec![(0, 0); scenario.bodies.len()];
+        for node in &nodes {
+            for (local, &g) in node.links.iter().enumerate() {
+                link_home[g] = (node.index, local);
+            }
+            for (local, &g) in node.bodies[..node.owned].iter().enumerate() {
+                body_home[g] = (node.index, local);
+            }
+        }
+        let mut kernel = Kernel::with_capacity(64);
+        let schedule = |k: &mut Kernel<Event>, t, class, e| {
+            k.schedule(t, class, e)
+                .expect("ok: initial events are at or after time zero");
+        };
+        for (c, ch) in channels.iter().enumerate() {
+            if !ch.routes.is_empty() {
+                schedule(
+                    &mut kernel,
+                    SimTime::ZERO,
+                    EventClass::Sample,
+                    Event::Sample { channel: c },
+                );
+            }
+        }
+        schedule(
+            &mut kernel,
+            SimTime::ZERO,
+            EventClass::PartitionStep,
+            Event::Step,
+        );
+        let first_window = scenario.measurement_period.min(scenario.duration);
+        schedule(
+            &mut kernel,
+            first_window,
+            EventClass::Measurement,
+            Event::WindowEnd,
+        );
+        let (nl, nb) = (scenario.links.len(), scenario.bodies.len());
+        CoSim {
+            meter: CostMeter::new(nl, scenario.dt),
+            scenario: Arc::new(scenario.clone()),
+            layout: Arc::new(layout),
+            kernel,
+            nodes,
+            channels,
+            epochs: Vec::new(),
+            link_home,
+            body_home,
+            w: vec![0.0; nl],
+            f: vec![0.0; nl],
+            p: vec![Vector3::zeros(); nb],
+            v: vec![Vector3::zeros(); nb],
+            steps_done: 0,
+            messages: 0,
+            events: 0,
+            max_violation: 0.0,
+        }
+    }
+
+    /// The scenario being run.
+    pub fn scenario(&self) -> &Scenario {
+        &self.scenario
+    }
+
+    /// The partition layout.
+    pub fn layout(&self) -> &Layout {
+        &self.layout
+    }
+
+    /// The nodes.
+    pub fn nodes(&self) -> &[Node] {
+        &self.nodes
+    }
+
+    /// The channels.
+    pub fn channels(&self) -> &[Channel] {
+        &self.channels
+    }
+
+    /// Closed measurement windows.
+    pub fn epochs(&self) -> &[EpochRecord] {
+        &self.epochs
+    }
+
+    /// Mean window cost so far [m].
+    pub fn mean_cost(&self) -> f64 {
+        self.meter.mean_cost()
+    }
+
+    /// Steps integrated so far.
+    pub fn steps_done(&self) -> u64 {
+        self.steps_done
+    }
+
+    /// Messages delivered so far.
+    pub fn messages(&self) -> u64 {
+        self.messages
+    }
+
+    /// Events processed so far.
+    pub fn events(&self) -> u64 {
+        self.events
+    }
+
+    /// Largest `|w|` seen at any step so far [m].
+    pub fn max_violation(&self) -> f64 {
+        self.max_violation
+    }
+
+    /// Time of the last processed event.
+    pub fn now(&self) -> SimTime {
+        self.kernel.now()
+    }
+
+    /// Whether every event up to the end of the run has been processed.
+    pub fn finished(&self) -> bool {
+        self.steps_done > self.scenario.steps
+    }
+
+    /// Processes every event before `t`, and the measurement events at `t` (so the
+    /// window ending at `t` is closed and a controller can decide at `t`).
+    pub fn advance_to(&mut self, t: SimTime, obs: &mut dyn Observer) -> Result<()> {
+        while let Some(key) = self.kernel.peek() {
+            if key.time > t || (key.time == t && key.class > EventClass::Measurement) {
+                break;
+            }
+            self.next_event(obs)?;
+        }
+        Ok(())
+    }
+
+    /// Processes every remaining event: the run to its end.
+    pub fn run_to_end(&mut self, obs: &mut dyn Observer) -> Result<()> {
+        while !self.kernel.is_empty() && !self.finished() {
+            self.next_event(obs)?;
+        }
+        Ok(())
+    }
+
+    fn next_event(&mut self, obs: &mut dyn Observer) -> Result<()> {
+        let Some((key, event)) = self.kernel.pop() else {
+            return Ok(());
+        };
+        self.events += 1;
+        let t = key.time;
+        match event {
+            Event::Step => self.step(t, obs),
+            Event::Sample { channel } => {
+                self.sample(t, channel);
+                Ok(())
+            }
+            Event::Deliver(msg) => {
+                self.messages += 1;
+                self.nodes[msg.to].apply(msg.from, &msg.payload);
+                Ok(())
+            }
+            Event::WindowEnd => {
+                self.window_end(t);
+                Ok(())
+            }
+        }
+    }
+
+    fn schedule(&mut self, t: SimTime, class: EventClass, event: Event) {
+        // Every event is scheduled at or after the current one, in a later or equal
+        // class at equal time: the kernel cannot refuse it.
+        self.kernel
+            .schedule(t, class, event)
+            .expect("ok: events are only scheduled forward in time");
+    }
+
+    /// A channel samples its routes at `t`.
+    fn sample(&mut self, t: SimTime, c: usize) {
+        let latency = self.channels[c].latency();
+        let arrive = SimTime(t.0 + latency.0);
+        for r in 0..self.channels[c].routes.len() {
+            let route = self.channels[c].routes[r];
+            let from = &self.nodes[route.from];
+            let payload = match (route.kind, route.link) {
+                (DataKind::State, _) => from.state_payload(t, route.body, route.to),
+                (DataKind::Force, Some(l)) => from.force_payload(l, route.body),
+                (DataKind::Force, None) => continue,
+            };
+            if arrive <= self.scenario.duration {
+                let msg = Message {
+                    from: route.from,
+                    to: route.to,
+                    channel: c,
+                    sent: t,
+                    payload,
+                };
+                self.schedule(arrive, EventClass::Delivery, Event::Deliver(Box::new(msg)));
+            }
+        }
+        let next = SimTime(t.0 + self.channels[c].tau.0);
+        if next < self.scenario.duration {
+            self.schedule(next, EventClass::Sample, Event::Sample { channel: c });
+        }
+    }
+
+    /// Closes the measurement window ending at `t`.
+    fn window_end(&mut self, t: SimTime) {
+        let e = self.meter.close(t).clone();
+        self.epochs.push(EpochRecord {
+            t_start: e.t_start,
+            t_end: e.t_end,
+            cost: e.cost,
+            taus: self.channels.iter().map(|c| (c.tau, c.tau)).collect(),
+            bandwidth: self
+                .channels
+                .iter()
+                .map(Channel::bandwidth)
+                .fold(0.0, |a, b| a + b),
+        });
+        if t < self.scenario.duration {
+            let next =
+                SimTime(t.0 + self.scenario.measurement_period.0).min(self.scenario.duration);
+            self.schedule(next, EventClass::Measurement, Event::WindowEnd);
+        }
+    }
+
+    /// The lock-step of every node at `t`.
+    fn step(&mut self, t: SimTime, obs: &mut dyn Observer) -> Result<()> {
+        let k = self.steps_done;
+        let last = k == self.scenario.steps;
+        for n in 0..self.nodes.len() {
+            let node = &mut self.nodes[n];
+            node.system
+                .begin_step(t, &node.state)
+                .map_err(|e| self.eval_error(t, n, e))?;
+        }
+        self.gather();
+        self.check(t)?;
+        let values = StepValues {
+            step: k,
+            time: t,
+            last,
+            w: &self.w,
+            f: &self.f,
+            p: &self.p,
+            v: &self.v,
+        };
+        obs.on_step(&values)
+            .map_err(|e| Error::io("trace.csv", e))?;
+        self.steps_done += 1;
+        if last {
+            return Ok(());
+        }
+        self.meter.add(&self.w);
+        for n in 0..self.nodes.len() {
+            let node = &mut self.nodes[n];
+            node.system
+                .finish_step(t, &mut node.state)
+                .map_err(|e| self.eval_error(t, n, e))?;
+            self.nodes[n].restore_held_ghosts();
+        }
+        self.schedule(
+            SimTime(t.0 + self.scenario.dt.0),
+            EventClass::PartitionStep,
+            Event::Step,
+        );
+        Ok(())
+    }
+
+    /// Copies each link's and body's values from the node that owns it.
+    fn gather(&mut self) {
+        for (l, &(n, ll)) in self.link_home.iter().enumerate() {
+            let node = &self.nodes[n];
+            self.w[l] = node.system.violations()[ll];
+            self.f[l] = node.system.tension(&node.state, ll);
+        }
+        for (b, &(n, lb)) in self.body_home.iter().enumerate() {
+            self.p[b] = self.nodes[n].state.p[lb];
+            self.v[b] = self.nodes[n].state.v[lb];
+        }
+    }
+
+    /// Divergence check of the gathered values at `t`.
+    fn check(&mut self, t: SimTime) -> Result<()> {
+        let bound = self.scenario.max_violation;
+        for (l, (&w, &f)) in self.w.iter().zip(&self.f).enumerate() {
+            let what = if !w.is_finite() || !f.is_finite() {
+                format!("non-finite w = {w} or f = {f}")
+            } else if w.abs() > bound {
+                format!("|w| = {} m exceeds the bound {bound} m", w.abs())
+            } else {
+                self.max_violation = self.max_violation.max(w.abs());
+                continue;
+            };
+            return Err(Error::Diverged(Divergence {
+                time: t,
+                node: self.link_home[l].0 + 1,
+                place: Place::Link(l + 1),
+                what,
+            }));
+        }
+        for (b, (p, v)) in self.p.iter().zip(&self.v).enumerate() {
+            if !(p.iter().chain(v.iter()).all(|x| x.is_finite())) {
+                return Err(Error::Diverged(Divergence {
+                    time: t,
+                    node: self.body_home[b].0 + 1,
+                    place: Place::Body(self.scenario.bodies[b].id),
+                    what: "non-finite position or velocity".into(),
+                }));
+            }
+        }
+        Ok(())
+    }
+
+    fn eval_error(&self, t: SimTime, node: usize, e: EvalError) -> Error {
+        match e {
+            EvalError::NonFinite { link } => {
+                let g = self.nodes[node].links[link];
+                let l = &self.scenario.links[g];
+                Error::Diverged(Divergence {
+                    time: t,
+                    node: node + 1,
+                    place: Place::Link(g + 1),
+                    what: format!(
+                        "non-finite kinematics (anchors of B{} and B{} coincide or the state is not finite)",
+                        self.scenario.bodies[l.a].id, self.scenario.bodies[l.b].id
+                    ),
+                })
+            }
+            EvalError::Solve(_) => Error::Numerical {
+                time: t,
+                message: format!(
+                    "node {}: the multiplier matrix J M⁻¹ Jᵀ is not positive definite \
+                     (redundant links or degenerate geometry)",
+                    node + 1
+                ),
+            },
+        }
+    }
+}

@@ -1,0 +1,8 @@
+//! What travels between nodes: messages ([`message`]) on periodic channels
+//! ([`channel`]).
+
+pub mod channel;
+pub mod message;
+
+pub use channel::Channel;
+pub use message::{Message, Payload};

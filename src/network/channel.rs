@@ -1,0 +1,43 @@
+//! Ideal periodic channels (SPEC section 4): a channel samples its routes every τ and
+//! delivers each sample after its latency; the receiver holds a value until the next
+//! arrival.
+
+use crate::kernel::SimTime;
+use crate::partition::layout::Route;
+use crate::scenario::model::ChannelSpec;
+
+/// A channel's configuration and the routes it carries.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Channel {
+    /// The scenario's description.
+    pub spec: ChannelSpec,
+    /// The period in force.
+    pub tau: SimTime,
+    /// Routes carried, in layout order.
+    pub routes: Vec<Route>,
+}
+
+impl Channel {
+    /// A channel at its scenario period, carrying the routes it matches.
+    pub fn new(spec: &ChannelSpec, all_routes: &[Route]) -> Channel {
+        Channel {
+            tau: spec.tau,
+            routes: all_routes
+                .iter()
+                .filter(|r| spec.carries(r.kind, r.from, r.to))
+                .copied()
+                .collect(),
+            spec: spec.clone(),
+        }
+    }
+
+    /// Latency in force.
+    pub fn latency(&self) -> SimTime {
+        self.spec.latency_for(self.tau)
+    }
+
+    /// Bandwidth used [units/s]: `k / τ`.
+    pub fn bandwidth(&self) -> f64 {
+        self.spec.k / self.tau.as_secs_f64()
+    }
+}

@@ -1,0 +1,75 @@
+//! Messages between nodes.
+
+use nalgebra::{Quaternion, Vector3};
+
+use crate::kernel::SimTime;
+use crate::scenario::model::DataKind;
+
+/// The data a message carries.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Payload {
+    /// A body's state for the nodes that ghost it, with the owner-side load on it (the
+    /// external force and every link force the receiver does not compute itself).
+    State {
+        /// Global body index.
+        body: usize,
+        /// Position [m].
+        p: Vector3<f64>,
+        /// Velocity [m/s].
+        v: Vector3<f64>,
+        /// Orientation (identity on the point-mass path).
+        q: Quaternion<f64>,
+        /// Angular velocity [rad/s] (zero on the point-mass path).
+        omega: Vector3<f64>,
+        /// Owner-side force [N].
+        force: Vector3<f64>,
+        /// Owner-side torque [N·m].
+        torque: Vector3<f64>,
+    },
+    /// A border link's load on a ghosted body, for the body's owner.
+    Force {
+        /// Global link index.
+        link: usize,
+        /// Global body index.
+        body: usize,
+        /// Force [N].
+        force: Vector3<f64>,
+        /// Torque [N·m].
+        torque: Vector3<f64>,
+    },
+}
+
+impl Payload {
+    /// The kind of data.
+    pub fn kind(&self) -> DataKind {
+        match self {
+            Payload::State { .. } => DataKind::State,
+            Payload::Force { .. } => DataKind::Force,
+        }
+    }
+
+    /// Number of `f64` values on the wire (rotation only where the scene has it).
+    pub fn floats(&self, rigid: bool) -> usize {
+        match (self, rigid) {
+            (Payload::State { .. }, false) => 9,
+            (Payload::State { .. }, true) => 19,
+            (Payload::Force { .. }, false) => 3,
+            (Payload::Force { .. }, true) => 6,
+        }
+    }
+}
+
+/// A message in flight.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Message {
+    /// Sending node (0-based).
+    pub from: usize,
+    /// Receiving node (0-based).
+    pub to: usize,
+    /// Channel index.
+    pub channel: usize,
+    /// Sample time (the values are those at this time).
+    pub sent: SimTime,
+    /// The data.
+    pub payload: Payload,
+}

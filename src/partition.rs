@@ -1,0 +1,15 @@
+//! The split of a model over computing nodes (SPEC section 3).
+//!
+//! - [`layout`]: who owns which body and link, which bodies each node ghosts, and the
+//!   message routes between nodes;
+//! - [`node`]: one node's own [`System`](crate::multibody::System) over its bodies, its
+//!   ghosts and its links, and how it builds and applies messages.
+//!
+//! A monolithic run is the one-node layout: the node's system is the whole model, it
+//! has no ghosts and sends nothing.
+
+pub mod layout;
+pub mod node;
+
+pub use layout::Layout;
+pub use node::Node;

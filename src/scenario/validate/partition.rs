@@ -1,0 +1,219 @@
+//! The partition stage: bodies to nodes (explicit lists or 2×2 grid quadrants), link
+//! ownership (internal links, the thesis ring, the general rule, the file's overrides).
+//!
+//! Nodes are 0-based here and 1-based in the file and in every message (`node 3` is
+//! `partition.nodes[2]`), as traces name them.
+
+use std::collections::BTreeMap;
+
+use super::bodies::Ids;
+use crate::error::{Error, Result};
+use crate::scenario::file::{GhostsFile, GridFile, LinkOwnerFile, PartitionFile};
+use crate::scenario::model::{BodySpec, GhostMode, LinkSpec, PartitionSpec};
+
+/// Validates `partition` against the model (`grid` is the model's grid section, if it
+/// is one; `bodies` and `links` are the validated model in file order).
+pub(super) fn partition(
+    p: &PartitionFile,
+    grid: Option<&GridFile>,
+    ids: &Ids,
+    bodies: &[BodySpec],
+    links: &[LinkSpec],
+) -> Result<PartitionSpec> {
+    let (nodes, node_of, ring) = match (&p.nodes, p.quadrants) {
+        (Some(lists), false) => {
+            let node_of = explicit(lists, ids, bodies)?;
+            (lists.len(), node_of, false)
+        }
+        (None, true) => quadrants(grid)?,
+        (Some(_), true) => {
+            return Err(Error::invalid(
+                "partition",
+                "give either `nodes` or `\"quadrants\": true`, not both",
+            ))
+        }
+        (None, false) => {
+            return Err(Error::invalid(
+                "partition",
+                "needs either `nodes` or `\"quadrants\": true`",
+            ))
+        }
+    };
+    let mut link_owner: Vec<usize> = links
+        .iter()
+        .map(|l| default_owner(node_of[l.a], node_of[l.b], node_of[l.a.min(l.b)], ring))
+        .collect();
+    overrides(&p.link_owners, &node_of, bodies, links, &mut link_owner)?;
+    Ok(PartitionSpec {
+        nodes,
+        node_of,
+        link_owner,
+        ghosts: match p.ghosts {
+            GhostsFile::Integrate => GhostMode::Integrate,
+            GhostsFile::Hold => GhostMode::Hold,
+        },
+    })
+}
+
+/// `partition.nodes`: every body in exactly one node, no node empty.
+fn explicit(lists: &[Vec<u32>], ids: &Ids, bodies: &[BodySpec]) -> Result<Vec<usize>> {
+    if lists.is_empty() {
+        return Err(Error::invalid(
+            "partition.nodes",
+            "must list at least one node (got [])",
+        ));
+    }
+    let mut node_of: Vec<Option<usize>> = vec![None; bodies.len()];
+    for (n, list) in lists.iter().enumerate() {
+        if list.is_empty() {
+            return Err(Error::invalid(
+                format!("partition.nodes[{n}]"),
+                format!("node {} is empty (got [])", n + 1),
+            ));
+        }
+        for (j, &id) in list.iter().enumerate() {
+            let path = format!("partition.nodes[{n}][{j}]");
+            let body = ids.index(&path, id)?;
+            if let Some(first) = node_of[body] {
+                return Err(Error::invalid(
+                    path,
+                    format!("body {id} is already in node {}", first + 1),
+                ));
+            }
+            node_of[body] = Some(n);
+        }
+    }
+    let missing: Vec<u32> = bodies
+        .iter()
+        .zip(&node_of)
+        .filter(|(_, n)| n.is_none())
+        .map(|(b, _)| b.id)
+        .collect();
+    if let Some(&first) = missing.first() {
+        let more = match missing.len() {
+            1 => String::new(),
+            n => format!(" (nor are {} more bodies)", n - 1),
+        };
+        return Err(Error::invalid(
+            "partition.nodes",
+            format!("body {first} is in no node{more}"),
+        ));
+    }
+    Ok(node_of.into_iter().flatten().collect())
+}
+
+/// `"quadrants": true`: 2×2 blocks of a grid with even rows and cols. Returns the node
+/// count, the node of each body and whether the blocks form the thesis ring.
+///
+/// The 2×2 block grid (a 4×4 body grid) is numbered as the thesis ring 1–2–3–4–1 going
+/// round the grid (1 at the origin corner, 2 along +x, 3 opposite 1, 4 along +y from
+/// 1); any other block grid row by row from the origin corner.
+fn quadrants(grid: Option<&GridFile>) -> Result<(usize, Vec<usize>, bool)> {
+    let path = "partition.quadrants";
+    let Some(g) = grid else {
+        return Err(Error::invalid(
+            path,
+            "needs a `grid` model (got explicit `bodies`); list the nodes instead",
+        ));
+    };
+    if g.rows % 2 != 0 || g.cols % 2 != 0 {
+        return Err(Error::invalid(
+            path,
+            format!(
+                "needs a grid with an even number of rows and cols (got a {}×{} grid)",
+                g.rows, g.cols
+            ),
+        ));
+    }
+    // rows·cols ≤ MAX_GRID_BODIES, checked by the model stage, so these fit a usize.
+    let (rows, cols) = (g.rows as usize, g.cols as usize);
+    let (block_rows, block_cols) = (rows / 2, cols / 2);
+    let ring = block_rows == 2 && block_cols == 2;
+    // Thesis ring by (block row, block col): (0,0)→1, (0,1)→2, (1,1)→3, (1,0)→4.
+    let ring_node = [[0, 1], [3, 2]];
+    let node_of = (0..rows * cols)
+        .map(|i| {
+            let (br, bc) = (i / cols / 2, i % cols / 2);
+            if ring {
+                ring_node[br][bc]
+            } else {
+                br * block_cols + bc
+            }
+        })
+        .collect();
+    Ok((block_rows * block_cols, node_of, ring))
+}
+
+/// The owner of a link between nodes `a` and `b` without an override: the common node
+/// of an internal link; on the thesis ring the node whose clockwise neighbour is the
+/// other (1 owns 1–2, 2 owns 2–3, 3 owns 3–4, 4 owns 4–1); else `first`, the node of the
+/// body that comes first in file order (SPEC section 3).
+fn default_owner(a: usize, b: usize, first: usize, ring: bool) -> usize {
+    if a == b || (ring && (a + 1) % 4 == b) {
+        a
+    } else if ring && (b + 1) % 4 == a {
+        b
+    } else {
+        first
+    }
+}
+
+/// Applies `partition.link_owners`: border links only, to one of their two nodes, each
+/// link at most once.
+fn overrides(
+    entries: &[LinkOwnerFile],
+    node_of: &[usize],
+    bodies: &[BodySpec],
+    links: &[LinkSpec],
+    link_owner: &mut [usize],
+) -> Result<()> {
+    let mut seen = BTreeMap::new();
+    for (i, o) in entries.iter().enumerate() {
+        let path = format!("partition.link_owners[{i}]");
+        let k = o.link;
+        if k == 0 || k > links.len() {
+            let range = match links.len() {
+                0 => "the model has no links".to_string(),
+                n => format!("links are numbered 1 to {n}"),
+            };
+            return Err(Error::invalid(
+                format!("{path}.link"),
+                format!("no link {k} ({range})"),
+            ));
+        }
+        if let Some(first) = seen.insert(k, i) {
+            return Err(Error::invalid(
+                format!("{path}.link"),
+                format!("link {k} is given an owner twice (also partition.link_owners[{first}])"),
+            ));
+        }
+        let l = &links[k - 1];
+        let (a, b) = (node_of[l.a], node_of[l.b]);
+        let ends = format!("bodies {}–{}", bodies[l.a].id, bodies[l.b].id);
+        if a == b {
+            return Err(Error::invalid(
+                format!("{path}.link"),
+                format!(
+                    "link {k} ({ends}) lies inside node {}; only a border link takes an owner",
+                    a + 1
+                ),
+            ));
+        }
+        if o.node != a + 1 && o.node != b + 1 {
+            return Err(Error::invalid(
+                format!("{path}.node"),
+                format!(
+                    "must be node {} or node {}, the nodes of link {k} ({ends}) (got {})",
+                    a.min(b) + 1,
+                    a.max(b) + 1,
+                    o.node
+                ),
+            ));
+        }
+        link_owner[k - 1] = o.node - 1;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests;

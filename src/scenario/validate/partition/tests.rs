@@ -1,0 +1,184 @@
+//! Quadrant layouts and link ownership against SPEC section 3.
+
+use crate::scenario::{parse_str, Scenario};
+
+/// A `rows × cols` thesis-style grid with the given `partition` and `channels`.
+fn grid(rows: u32, cols: u32, partition: &str, channels: &str) -> Scenario {
+    let text = format!(
+        r#"{{"name": "p", "seed": 1, "duration": 1.0, "dt": 0.001,
+            "model": {{"grid": {{"rows": {rows}, "cols": {cols}, "spacing": 1.8,
+                                 "mass": 1.0, "size": 0.2}}}},
+            "partition": {partition},
+            "channels": {channels}}}"#
+    );
+    match parse_str(&text, "test.json") {
+        Ok(s) => s,
+        Err(e) => panic!("expected a valid scenario, got: {e}"),
+    }
+}
+
+/// The thesis space distribution: τ1 on borders 1–2 and 1–4, τ2 on 2–3 and 3–4.
+const SPACE: &str = r#"[
+    {"name": "tau1", "tau": 0.005, "borders": [[1, 2], [1, 4]]},
+    {"name": "tau2", "tau": 0.01, "borders": [[2, 3], [4, 3]]}]"#;
+
+/// The thesis layout written out.
+const THESIS_NODES: &str = "[[1, 2, 5, 6], [3, 4, 7, 8], [11, 12, 15, 16], [9, 10, 13, 14]]";
+
+/// Owner (1-based) of the link between body ids `a` and `b`.
+fn owner(s: &Scenario, a: u32, b: u32) -> usize {
+    let p = s.partition.as_ref().unwrap();
+    let k = s
+        .links
+        .iter()
+        .position(|l| {
+            let ends = (s.bodies[l.a].id, s.bodies[l.b].id);
+            ends == (a, b) || ends == (b, a)
+        })
+        .unwrap_or_else(|| panic!("no link {a}–{b}"));
+    p.link_owner[k] + 1
+}
+
+/// Border links as (body id, body id, owner node 1-based), in link order.
+fn border_links(s: &Scenario) -> Vec<(u32, u32, usize)> {
+    let p = s.partition.as_ref().unwrap();
+    s.links
+        .iter()
+        .zip(&p.link_owner)
+        .filter(|(l, _)| p.node_of[l.a] != p.node_of[l.b])
+        .map(|(l, &o)| (s.bodies[l.a].id, s.bodies[l.b].id, o + 1))
+        .collect()
+}
+
+/// The SPEC's ring ownership, by body-id pairs.
+const RING: [(u32, u32, usize); 8] = [
+    (2, 3, 1),
+    (6, 7, 1),
+    (7, 11, 2),
+    (8, 12, 2),
+    (11, 10, 3),
+    (15, 14, 3),
+    (9, 5, 4),
+    (10, 6, 4),
+];
+
+#[test]
+fn thesis_quadrants_are_the_ring_of_spec_section_3() {
+    let s = grid(4, 4, r#"{"quadrants": true}"#, SPACE);
+    let p = s.partition.as_ref().unwrap();
+    assert_eq!(p.nodes, 4);
+    let node = |id: u32| p.node_of[id as usize - 1];
+    for (n, ids) in [
+        [1, 2, 5, 6],
+        [3, 4, 7, 8],
+        [11, 12, 15, 16],
+        [9, 10, 13, 14],
+    ]
+    .iter()
+    .enumerate()
+    {
+        for &id in ids {
+            assert_eq!(node(id), n, "body {id}");
+        }
+    }
+    for (a, b, n) in RING {
+        assert_eq!(owner(&s, a, b), n, "border link {a}–{b}");
+    }
+    assert_eq!(border_links(&s).len(), 8);
+    for n in 0..4 {
+        let owned = p.link_owner.iter().filter(|&&o| o == n).count();
+        assert_eq!(owned, 6, "links owned by node {}", n + 1);
+    }
+    // Internal links belong to their node.
+    assert_eq!(owner(&s, 1, 2), 1);
+    assert_eq!(owner(&s, 15, 16), 3);
+    assert_eq!(p.ghosts, crate::scenario::model::GhostMode::Integrate);
+}
+
+#[test]
+fn larger_quadrants_are_numbered_row_by_row_and_owned_by_the_lower_body() {
+    let s = grid(
+        8,
+        8,
+        r#"{"quadrants": true, "ghosts": "hold"}"#,
+        "[{\"name\": \"all\", \"tau\": 0.002}]",
+    );
+    let p = s.partition.as_ref().unwrap();
+    assert_eq!(p.nodes, 16);
+    for (i, &n) in p.node_of.iter().enumerate() {
+        let (r, c) = (i / 8, i % 8);
+        assert_eq!(n, (r / 2) * 4 + c / 2, "body {}", i + 1);
+    }
+    for n in 0..16 {
+        assert_eq!(p.node_of.iter().filter(|&&m| m == n).count(), 4);
+    }
+    for (l, &o) in s.links.iter().zip(&p.link_owner) {
+        assert_eq!(o, p.node_of[l.a.min(l.b)]);
+    }
+    // A +x link from an odd column (1, 3, 5) or a +y link from an odd row crosses a
+    // block boundary: 3 per row or column, 8 rows and 8 columns.
+    assert_eq!(border_links(&s).len(), 3 * 8 + 3 * 8);
+    assert_eq!(p.ghosts, crate::scenario::model::GhostMode::Hold);
+}
+
+#[test]
+fn explicit_thesis_nodes_need_overrides_to_give_the_ring() {
+    let quadrants = grid(4, 4, r#"{"quadrants": true}"#, SPACE);
+    let plain = grid(4, 4, &format!(r#"{{"nodes": {THESIS_NODES}}}"#), SPACE);
+    let (q, e) = (
+        quadrants.partition.as_ref().unwrap(),
+        plain.partition.as_ref().unwrap(),
+    );
+    assert_eq!(e.node_of, q.node_of);
+    // The general rule gives a border link to the node of its lower-numbered body:
+    // the ring's 11–10, 15–14 (node 3) and 9–5, 10–6 (node 4) go the other way.
+    for (a, b, ring, general) in [(11, 10, 3, 4), (15, 14, 3, 4), (9, 5, 4, 1), (10, 6, 4, 1)] {
+        assert_eq!(owner(&quadrants, a, b), ring, "{a}–{b}");
+        assert_eq!(owner(&plain, a, b), general, "{a}–{b}");
+    }
+    for (a, b, n) in [(2, 3, 1), (6, 7, 1), (7, 11, 2), (8, 12, 2)] {
+        assert_eq!(owner(&plain, a, b), n, "{a}–{b}");
+    }
+    // Links 9 = 5–9, 11 = 6–10, 17 = 10–11, 23 = 14–15 (grid numbering).
+    let overridden = grid(
+        4,
+        4,
+        &format!(
+            r#"{{"nodes": {THESIS_NODES}, "link_owners": [
+                {{"link": 9, "node": 4}}, {{"link": 11, "node": 4}},
+                {{"link": 17, "node": 3}}, {{"link": 23, "node": 3}}]}}"#
+        ),
+        SPACE,
+    );
+    assert_eq!(overridden.partition, quadrants.partition);
+}
+
+#[test]
+fn one_node_needs_no_channels_and_overrides_apply_to_quadrants() {
+    let s = grid(2, 3, r#"{"nodes": [[1, 2, 3, 4, 5, 6]]}"#, "[]");
+    let p = s.partition.as_ref().unwrap();
+    assert_eq!((p.nodes, p.link_owner.clone()), (1, vec![0; 7]));
+    assert!(s.channels.is_empty());
+    // Quadrant ring link 3 = 2–3 (node 1 → 2) handed to node 2.
+    let s = grid(
+        4,
+        4,
+        r#"{"quadrants": true, "link_owners": [{"link": 3, "node": 2}]}"#,
+        SPACE,
+    );
+    assert_eq!(owner(&s, 2, 3), 2);
+    assert_eq!(owner(&s, 6, 7), 1);
+    // A 4×2 grid is one column of two blocks: nodes by block row, no ring.
+    let s = grid(
+        4,
+        2,
+        r#"{"quadrants": true}"#,
+        r#"[{"name": "c", "tau": 0.001}]"#,
+    );
+    let p = s.partition.as_ref().unwrap();
+    assert_eq!(
+        (p.nodes, p.node_of.clone()),
+        (2, vec![0, 0, 0, 0, 1, 1, 1, 1])
+    );
+    assert_eq!(border_links(&s), vec![(3, 5, 1), (4, 6, 1)]);
+}
