@@ -220,19 +220,23 @@ fn write_plots(out: &Path, world: &CoSim, rec: &Recorder) -> Result<()> {
         false,
     )?;
     let epochs = world.epochs();
-    let per_epoch = |label: String, f: &dyn Fn(&crate::cosim::EpochRecord) -> f64| Series {
-        label,
-        points: epochs
+    // Step plots: each window's value from its start, and the last one held to its end.
+    let per_epoch = |label: String, f: &dyn Fn(&crate::cosim::EpochRecord) -> f64| {
+        let mut points: Vec<(f64, f64)> = epochs
             .iter()
             .map(|e| (e.t_start.as_secs_f64(), f(e)))
-            .collect(),
+            .collect();
+        if let Some(e) = epochs.last() {
+            points.push((e.t_end.as_secs_f64(), f(e)));
+        }
+        Series { label, points }
     };
     let period = world.scenario().measurement_period.as_secs_f64();
     plot(
         out,
         "cost.svg",
         &title(&format!("cost per window (T = {period} s)")),
-        "window start t [s]",
+        "time t [s]",
         "cost C [m]",
         &[per_epoch("cost C".into(), &|e| e.cost)],
         true,
@@ -253,7 +257,7 @@ fn write_plots(out: &Path, world: &CoSim, rec: &Recorder) -> Result<()> {
         out,
         "delays.svg",
         &title("delays per channel"),
-        "window start t [s]",
+        "time t [s]",
         "delay τ [ms]",
         &delays,
         true,
@@ -262,7 +266,7 @@ fn write_plots(out: &Path, world: &CoSim, rec: &Recorder) -> Result<()> {
         out,
         "bandwidth.svg",
         &title("bandwidth used"),
-        "window start t [s]",
+        "time t [s]",
         "bandwidth Σ k/τ [1/s]",
         &[per_epoch("bandwidth used".into(), &|e| e.bandwidth)],
         true,
