@@ -3,7 +3,9 @@
 
 pub mod cost;
 pub mod dsm;
+pub mod experiment;
 pub mod nelder_mead;
+pub mod problem;
 
 pub use cost::{CostMeter, Epoch};
 pub use dsm::{d_s_min, Dsm, DsmConfig, DsmError, DsmPhase, Feasible, SimplexError};

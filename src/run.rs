@@ -11,6 +11,7 @@ use std::time::Instant;
 
 use serde_json::json;
 
+use crate::control::experiment::Experiment;
 use crate::cosim::CoSim;
 use crate::error::{Error, Result};
 use crate::kernel::SimTime;
@@ -18,6 +19,8 @@ use crate::output::{create_dir_all, write_atomic, AtomicFile};
 use crate::report::{write_line_plot, LinePlot, Scale, Series};
 use crate::scenario::model::{Scenario, Solver, Stabilizer};
 use crate::trace::Recorder;
+
+mod controlled;
 
 /// What a finished (or diverged) run measured.
 #[derive(Debug, Clone, PartialEq)]
@@ -55,7 +58,12 @@ pub fn run(scenario: &Scenario, out: &Path) -> Result<Outcome> {
     .map_err(|e| Error::io(&trace_path, e))?;
     let mut world = CoSim::new(scenario);
     let started = Instant::now();
-    let result = drive(&mut world, &mut recorder);
+    let mut experiment = Experiment::default();
+    let result = if scenario.controller.is_some() {
+        crate::control::experiment::run(&mut world, &mut recorder, &mut experiment)
+    } else {
+        drive(&mut world, &mut recorder)
+    };
     let wall_seconds = started.elapsed().as_secs_f64();
     recorder.commit()?;
     let outcome = Outcome {
@@ -68,9 +76,12 @@ pub fn run(scenario: &Scenario, out: &Path) -> Result<Outcome> {
         events: world.events(),
     };
     let error = result.as_ref().err().map(ToString::to_string);
-    write_epochs(out, &world)?;
-    write_summary(out, &world, &outcome, error.as_deref())?;
+    write_epochs(out, &world, &experiment)?;
+    write_summary(out, &world, &outcome, error.as_deref(), &experiment)?;
     write_plots(out, &world, &recorder)?;
+    if world.scenario().controller.is_some() {
+        controlled::write_plots(out, &world, &experiment)?;
+    }
     result.map(|()| outcome)
 }
 
@@ -92,27 +103,37 @@ fn drive(world: &mut CoSim, recorder: &mut Recorder) -> Result<()> {
     Ok(())
 }
 
-fn write_epochs(out: &Path, world: &CoSim) -> Result<()> {
+fn write_epochs(out: &Path, world: &CoSim, exp: &Experiment) -> Result<()> {
     let mut s = String::from("t_start,t_end");
     for c in world.channels() {
         s.push_str(&format!(",tau_{0}_requested,tau_{0}_achieved", c.spec.name));
     }
-    s.push_str(",bandwidth,cost\n");
-    for e in world.epochs() {
+    s.push_str(",bandwidth,cost");
+    s.push_str(&controlled::epoch_header(world, exp));
+    s.push('\n');
+    for (i, e) in world.epochs().iter().enumerate() {
         s.push_str(&format!(
             "{},{}",
             e.t_start.as_secs_f64(),
             e.t_end.as_secs_f64()
         ));
         for (req, ach) in &e.taus {
-            s.push_str(&format!(",{},{}", req.as_secs_f64(), ach.as_secs_f64()));
+            s.push_str(&format!(",{req},{ach}"));
         }
-        s.push_str(&format!(",{},{}\n", e.bandwidth, e.cost));
+        s.push_str(&format!(",{},{}", e.bandwidth, e.cost));
+        s.push_str(&controlled::epoch_row(world, exp, i));
+        s.push('\n');
     }
     write_atomic(&out.join("epochs.csv"), s.as_bytes())
 }
 
-fn write_summary(out: &Path, world: &CoSim, outcome: &Outcome, error: Option<&str>) -> Result<()> {
+fn write_summary(
+    out: &Path,
+    world: &CoSim,
+    outcome: &Outcome,
+    error: Option<&str>,
+    exp: &Experiment,
+) -> Result<()> {
     let scenario = world.scenario();
     let stabilizer = match scenario.stabilizer {
         Stabilizer::Smc { mu, k, epsilon } => {
@@ -168,6 +189,8 @@ fn write_summary(out: &Path, world: &CoSim, outcome: &Outcome, error: Option<&st
         "stabilizer": stabilizer,
         "solver": solver,
     });
+    let mut summary = summary;
+    controlled::summarize(world, exp, &mut summary);
     let mut text = serde_json::to_string_pretty(&summary).unwrap_or_default();
     text.push('\n');
     write_atomic(&out.join("summary.json"), text.as_bytes())
@@ -247,10 +270,10 @@ fn write_plots(out: &Path, world: &CoSim, rec: &Recorder) -> Result<()> {
     let mut delays = Vec::new();
     for (c, ch) in world.channels().iter().enumerate() {
         delays.push(per_epoch(format!("{} requested", ch.spec.name), &|e| {
-            e.taus[c].0.as_secs_f64() * 1e3
+            e.taus[c].0 * 1e3
         }));
         delays.push(per_epoch(format!("{} achieved", ch.spec.name), &|e| {
-            e.taus[c].1.as_secs_f64() * 1e3
+            e.taus[c].1 * 1e3
         }));
     }
     plot(

@@ -54,8 +54,8 @@ pub struct EpochRecord {
     pub t_end: SimTime,
     /// Cost C over the window [m].
     pub cost: f64,
-    /// Requested and achieved period per channel.
-    pub taus: Vec<(SimTime, SimTime)>,
+    /// Requested and achieved period per channel [s].
+    pub taus: Vec<(f64, f64)>,
     /// Bandwidth used `Σ k/τ` [units/s].
     pub bandwidth: f64,
 }
@@ -217,6 +217,33 @@ impl CoSim {
         self.steps_done > self.scenario.steps
     }
 
+    /// Sets the channel periods from time `at` on (a controller decision): `requested[c]`
+    /// is what was asked [s], `achieved[c]` the period the channel runs at. Each
+    /// channel's pending sample is replaced by one at `at`, so the new period starts
+    /// there; messages already in flight are delivered as scheduled.
+    pub fn set_taus(&mut self, at: SimTime, requested: &[f64], achieved: &[SimTime]) {
+        for (c, ch) in self.channels.iter_mut().enumerate() {
+            if ch.tau == achieved[c] && ch.requested == requested[c] {
+                continue;
+            }
+            ch.requested = requested[c];
+            if ch.tau == achieved[c] {
+                continue;
+            }
+            ch.tau = achieved[c];
+            if ch.routes.is_empty() {
+                continue;
+            }
+            self.kernel
+                .cancel_if(|e| matches!(e, Event::Sample { channel } if *channel == c));
+            if at < self.scenario.duration {
+                self.kernel
+                    .schedule(at, EventClass::Sample, Event::Sample { channel: c })
+                    .expect("ok: a controller acts at the current window boundary");
+            }
+        }
+    }
+
     /// Processes every event before `t`, and the measurement events at `t` (so the
     /// window ending at `t` is closed and a controller can decide at `t`).
     pub fn advance_to(&mut self, t: SimTime, obs: &mut dyn Observer) -> Result<()> {
@@ -305,7 +332,11 @@ impl CoSim {
             t_start: e.t_start,
             t_end: e.t_end,
             cost: e.cost,
-            taus: self.channels.iter().map(|c| (c.tau, c.tau)).collect(),
+            taus: self
+                .channels
+                .iter()
+                .map(|c| (c.requested, c.tau.as_secs_f64()))
+                .collect(),
             bandwidth: self
                 .channels
                 .iter()

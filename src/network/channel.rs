@@ -11,8 +11,11 @@ use crate::scenario::model::ChannelSpec;
 pub struct Channel {
     /// The scenario's description.
     pub spec: ChannelSpec,
-    /// The period in force.
+    /// The period in force (achieved: a whole number of `dt`).
     pub tau: SimTime,
+    /// The period last requested [s] (a controller may ask for any real value; the
+    /// channel runs at the next whole number of steps, `tau`).
+    pub requested: f64,
     /// Routes carried, in layout order.
     pub routes: Vec<Route>,
 }
@@ -22,6 +25,7 @@ impl Channel {
     pub fn new(spec: &ChannelSpec, all_routes: &[Route]) -> Channel {
         Channel {
             tau: spec.tau,
+            requested: spec.tau.as_secs_f64(),
             routes: all_routes
                 .iter()
                 .filter(|r| spec.carries(r.kind, r.from, r.to))

@@ -108,6 +108,13 @@ pub struct ScenarioFile {
     /// channel (an empty list counts as none).
     #[serde(default)]
     pub channels: Vec<ChannelFile>,
+    /// The delay controller; default none (channels keep their periods).
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub controller: Option<ControllerFile>,
 }
 
 /// `integrator`: the time integrator of the `(x, v, z)` state.
@@ -355,6 +362,28 @@ pub struct ForceFile {
         skip_serializing_if = "Option::is_none"
     )]
     pub until: Option<f64>,
+    /// Linear amplitude envelope; default none (scale 1).
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub ramp: Option<RampFile>,
+}
+
+/// `forces[].ramp`: the amplitude is scaled by `a0` until `t0`, by `a1` from `t1`, and
+/// linearly in between (used to move a load smoothly from one body to another).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RampFile {
+    /// Ramp start [s], ≥ 0.
+    pub t0: f64,
+    /// Ramp end [s], > `t0`.
+    pub t1: f64,
+    /// Scale at and before `t0` [1].
+    pub a0: f64,
+    /// Scale at and after `t1` [1].
+    pub a1: f64,
 }
 
 fn default_max_violation() -> f64 {
@@ -568,4 +597,143 @@ pub struct ChannelFile {
         skip_serializing_if = "Option::is_none"
     )]
     pub kinds: Option<Vec<DataKindFile>>,
+}
+
+/// A controller method name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MethodFile {
+    /// `"dsm"`: Dynamic Simplex Method (default).
+    #[default]
+    Dsm,
+    /// `"grid"`: grid search every window.
+    Grid,
+    /// `"no_opt"`: equal delays at the budget.
+    NoOpt,
+    /// `"fixed"`: the initial delays.
+    Fixed,
+    /// `"nelder_mead"`: static Nelder–Mead.
+    NelderMead,
+}
+
+/// `controller.problem`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ProblemKind {
+    /// `"cp"`: constrained by the bandwidth budget.
+    Cp,
+    /// `"up"`: unconstrained with a bandwidth penalty.
+    Up,
+}
+
+/// `controller.measure`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MeasureFile {
+    /// `"lookahead"`: fork the world per candidate (default).
+    #[default]
+    Lookahead,
+    /// `"online"`: one candidate per window on the live plant.
+    Online,
+}
+
+fn default_dsm_size() -> f64 {
+    0.012
+}
+
+fn default_reflections() -> usize {
+    5
+}
+
+fn default_grid_step() -> f64 {
+    0.001
+}
+
+/// `controller.dsm`: the simplex (thesis values by default).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DsmFile {
+    /// Simplex size D_s [s]; default 0.012 (thesis: 2 D_smin).
+    #[serde(default = "default_dsm_size")]
+    pub size: f64,
+    /// Reflections per iteration m_r; default 5 (thesis).
+    #[serde(default = "default_reflections")]
+    pub reflections: usize,
+}
+
+impl Default for DsmFile {
+    fn default() -> Self {
+        DsmFile {
+            size: default_dsm_size(),
+            reflections: default_reflections(),
+        }
+    }
+}
+
+/// `controller`: delay optimization (SPEC section 5). Its period is `measurement.period`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControllerFile {
+    /// Method driving the live plant; default `"dsm"`.
+    #[serde(default)]
+    pub method: MethodFile,
+    /// `"cp"` or `"up"`; required.
+    pub problem: ProblemKind,
+    /// Bandwidth budget B [1/s]; required for `cp`.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub budget: Option<f64>,
+    /// Bandwidth price b [m·s]; required for `up`.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub penalty: Option<f64>,
+    /// How candidates are measured; default `"lookahead"`.
+    #[serde(default)]
+    pub measure: MeasureFile,
+    /// Lower bound of every delay [s]; default `dt`.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub tau_min: Option<f64>,
+    /// Upper bound of every delay [s]; required.
+    pub tau_max: f64,
+    /// Initial controlled delays [s]; default: the channels' `tau` (CP: all but the
+    /// last).
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub initial: Option<Vec<f64>>,
+    /// DSM simplex; default thesis values.
+    #[serde(default)]
+    pub dsm: DsmFile,
+    /// Baselines evaluated every window; default none.
+    #[serde(default)]
+    pub baselines: Vec<MethodFile>,
+    /// Also evaluate DSM ± δ [s] on each controlled delay; default none.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub dsm_delta: Option<f64>,
+    /// Grid-search step [s]; default 0.001 (thesis).
+    #[serde(default = "default_grid_step")]
+    pub grid_step: f64,
+    /// Window start [s] whose cost surface is plotted with the DSM path; default none.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub surface_window: Option<f64>,
 }

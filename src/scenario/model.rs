@@ -141,6 +141,35 @@ pub struct ForceSpec {
     pub from: SimTime,
     /// Switch-off time (exclusive); `None` = never.
     pub until: Option<SimTime>,
+    /// Optional linear amplitude envelope.
+    pub ramp: Option<Ramp>,
+}
+
+/// A linear amplitude envelope: scale `a0` until `t0`, `a1` from `t1`, linear between.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ramp {
+    /// Start of the ramp.
+    pub t0: SimTime,
+    /// End of the ramp.
+    pub t1: SimTime,
+    /// Scale before and at `t0` [1].
+    pub a0: f64,
+    /// Scale at and after `t1` [1].
+    pub a1: f64,
+}
+
+impl Ramp {
+    /// The scale at `t`.
+    pub fn at(&self, t: SimTime) -> f64 {
+        if t <= self.t0 {
+            self.a0
+        } else if t >= self.t1 {
+            self.a1
+        } else {
+            let u = (t.0 - self.t0.0) as f64 / (self.t1.0 - self.t0.0) as f64;
+            self.a0 + (self.a1 - self.a0) * u
+        }
+    }
 }
 
 impl ForceSpec {
@@ -148,7 +177,8 @@ impl ForceSpec {
     pub fn at(&self, t: SimTime) -> Vector3<f64> {
         let on = t >= self.from && self.until.is_none_or(|u| t < u);
         if on {
-            self.amplitude * (self.omega * t.as_secs_f64() + self.phase).sin()
+            let scale = self.ramp.map_or(1.0, |r| r.at(t));
+            self.amplitude * (scale * (self.omega * t.as_secs_f64() + self.phase).sin())
         } else {
             Vector3::zeros()
         }
@@ -253,6 +283,91 @@ pub enum NetworkSpec {
     Ideal,
 }
 
+/// The delay-optimization problem (SPEC section 5).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Problem {
+    /// CP: minimize C subject to `Σ k_i/τ_i ≤ budget`; the controller sets the first
+    /// n − 1 channels and the last takes the remaining budget.
+    Constrained {
+        /// Bandwidth budget B [1/s].
+        budget: f64,
+    },
+    /// UP: minimize `C + penalty · Σ k_i/τ_i` over all n delays.
+    Unconstrained {
+        /// Bandwidth price b [m·s].
+        penalty: f64,
+    },
+}
+
+/// How the controller picks the delays the live plant runs at.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Method {
+    /// The Dynamic Simplex Method (SPEC section 5).
+    Dsm,
+    /// Every feasible grid point measured each window; the best is used ("true
+    /// optimum").
+    Grid,
+    /// All delays equal, at the budget (CP) or at the initial value (UP).
+    NoOptimization,
+    /// The initial delays, never changed.
+    Fixed,
+    /// Static Nelder–Mead: treats the cost as fixed, converges, then stays.
+    NelderMead,
+}
+
+impl Method {
+    /// Name used in scenario files, summary keys (`mean_cost_<name>`) and epochs.csv.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Dsm => "dsm",
+            Method::Grid => "grid",
+            Method::NoOptimization => "no_opt",
+            Method::Fixed => "fixed",
+            Method::NelderMead => "nelder_mead",
+        }
+    }
+}
+
+/// How a candidate's cost is measured.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Measure {
+    /// Fork the whole co-simulation at the window start and run the window under the
+    /// candidate (the thesis's server-side simulation); the live plant then runs the
+    /// window under the chosen delays.
+    Lookahead,
+    /// Run each candidate on the live plant for one window and measure it there.
+    Online,
+}
+
+/// The controller (SPEC section 5). Its period T is the measurement period.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ControllerSpec {
+    /// Method driving the live plant.
+    pub method: Method,
+    /// The problem.
+    pub problem: Problem,
+    /// How candidates are measured.
+    pub measure: Measure,
+    /// Lower bound of every delay [s].
+    pub tau_min: f64,
+    /// Upper bound of every delay [s].
+    pub tau_max: f64,
+    /// Initial controlled delays [s] (CP: the first n − 1 channels; UP: all n).
+    pub initial: Vec<f64>,
+    /// DSM simplex size D_s [s].
+    pub dsm_size: f64,
+    /// DSM reflections per iteration m_r.
+    pub reflections: usize,
+    /// Baselines evaluated every window from the live state (never the live method).
+    pub baselines: Vec<Method>,
+    /// Also evaluate DSM ± δ on each controlled delay (when the method is DSM).
+    pub dsm_delta: Option<f64>,
+    /// Grid-search step [s].
+    pub grid_step: f64,
+    /// Start of the window whose whole cost surface is plotted with the DSM path.
+    pub surface_window: Option<SimTime>,
+}
+
 /// A validated scenario.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Scenario {
@@ -292,4 +407,6 @@ pub struct Scenario {
     pub network: NetworkSpec,
     /// Channels (empty on a monolithic run).
     pub channels: Vec<ChannelSpec>,
+    /// Delay controller; `None` = channels keep their scenario periods.
+    pub controller: Option<ControllerSpec>,
 }

@@ -21,6 +21,7 @@
 mod bodies;
 mod channels;
 pub(super) mod checks;
+mod controller;
 mod partition;
 
 use std::collections::BTreeMap;
@@ -173,6 +174,16 @@ pub fn validate(file: ScenarioFile) -> Result<Scenario> {
     };
     let network = network(&file.network)?;
     let channels = channels(&file.channels, partition.as_ref(), &links, dt)?;
+    let controller = match &file.controller {
+        Some(c) => Some(controller::controller(
+            c,
+            &channels,
+            dt,
+            duration,
+            measurement_period,
+        )?),
+        None => None,
+    };
 
     Ok(Scenario {
         name: file.name,
@@ -193,6 +204,7 @@ pub fn validate(file: ScenarioFile) -> Result<Scenario> {
         partition,
         network,
         channels,
+        controller,
     })
 }
 
@@ -332,6 +344,10 @@ fn force(path: &str, f: &ForceFile, ids: &Ids) -> Result<ForceSpec> {
             Some(time(&until_path, until)?)
         }
     };
+    let ramp = match &f.ramp {
+        Some(r) => Some(controller::ramp(&format!("{path}.ramp"), r)?),
+        None => None,
+    };
     Ok(ForceSpec {
         body,
         amplitude,
@@ -339,6 +355,7 @@ fn force(path: &str, f: &ForceFile, ids: &Ids) -> Result<ForceSpec> {
         phase,
         from,
         until,
+        ramp,
     })
 }
 

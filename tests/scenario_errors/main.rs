@@ -742,6 +742,7 @@ fn force(ids: Vec<u32>) -> impl Strategy<Value = ForceFile> {
             phase,
             from: from as f64 / 10.0,
             until: length.map(|l| (from + l) as f64 / 10.0),
+            ramp: None,
         })
 }
 
@@ -942,6 +943,7 @@ fn scenario() -> impl Strategy<Value = ScenarioFile> {
                     plot_bodies,
                 },
                 partition,
+                controller: None,
                 network: NetworkFile::default(),
                 channels,
             }

@@ -1,0 +1,309 @@
+//! A controlled run: every measurement window the controller picks the delays the live
+//! plant runs at, and every baseline is evaluated on the same window from the same
+//! state (SPEC section 5).
+//!
+//! Per window `[t, t + T)`, at the window boundary (kernel class `Controller`: after the
+//! window ending at t is measured, before anything at t is sampled):
+//! 1. the grid search, when needed, forks the world once per grid point (in parallel;
+//!    results are collected in grid order, so threads cannot change a bit);
+//! 2. the live method decides: DSM with `lookahead` runs one iteration, each candidate
+//!    measured on a fork over `[t, t + T)`; with `online` it asks for one candidate,
+//!    which the live plant runs and the window then measures;
+//! 3. each baseline's choice is measured on a fork over the same window;
+//! 4. the live world runs the window at the chosen delays.
+//!
+//! Forks are clones of the world: they never touch the live run, whose digest is the
+//! same with or without baselines. A fork that diverges scores `+∞`.
+
+use rayon::prelude::*;
+
+use super::dsm::{Dsm, DsmConfig};
+use super::nelder_mead::{NelderMead, NelderMeadConfig};
+use super::problem::Delays;
+use crate::cosim::{CoSim, Observer};
+use crate::error::{Error, Result};
+use crate::kernel::SimTime;
+use crate::scenario::model::{ControllerSpec, Measure, Method};
+
+/// A measured point of the delay space.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Candidate {
+    /// Controlled delays [s].
+    pub x: Vec<f64>,
+    /// Objective over the window (CP: cost C [m]; UP: C + bΣk/τ).
+    pub objective: f64,
+}
+
+/// One baseline's result in one window.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BaselineResult {
+    /// Method name (`grid`, `no_opt`, `dsm_tau1_plus`, …).
+    pub name: String,
+    /// Its choice and objective (`NaN` when the choice was infeasible).
+    pub candidate: Candidate,
+}
+
+/// What happened in one window.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WindowReport {
+    /// Window start.
+    pub t_start: SimTime,
+    /// Window end.
+    pub t_end: SimTime,
+    /// The live method's choice and the objective the live plant measured.
+    pub live: Candidate,
+    /// Baselines, in the scenario's order (then DSM ± δ).
+    pub baselines: Vec<BaselineResult>,
+    /// The grid optimum of this window, when the grid was searched.
+    pub grid_best: Option<Candidate>,
+    /// Candidates the DSM measured in this window (lookahead), in order.
+    pub dsm_path: Vec<Candidate>,
+}
+
+/// Everything a controlled run measured.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Experiment {
+    /// One report per window, in time order.
+    pub windows: Vec<WindowReport>,
+    /// The whole grid of the surface window, with its start.
+    pub surface: Option<(SimTime, Vec<Candidate>)>,
+}
+
+impl Experiment {
+    /// Mean objective of a method over the windows where it was measured (finite).
+    pub fn mean(&self, name: &str, live_name: &str) -> Option<f64> {
+        let values: Vec<f64> = self
+            .windows
+            .iter()
+            .filter_map(|w| {
+                if name == live_name {
+                    Some(w.live.objective)
+                } else {
+                    w.baselines
+                        .iter()
+                        .find(|b| b.name == name)
+                        .map(|b| b.candidate.objective)
+                }
+            })
+            .filter(|v| v.is_finite())
+            .collect();
+        (!values.is_empty()).then(|| values.iter().sum::<f64>() / values.len() as f64)
+    }
+
+    /// Names of the baselines, in column order.
+    pub fn baseline_names(&self) -> Vec<String> {
+        self.windows
+            .first()
+            .map(|w| w.baselines.iter().map(|b| b.name.clone()).collect())
+            .unwrap_or_default()
+    }
+}
+
+/// Measures `x` on a fork of `world` over `[t, t_end)`.
+fn evaluate(world: &CoSim, delays: &Delays, x: &[f64], t: SimTime, t_end: SimTime) -> f64 {
+    let Some(taus) = delays.taus(x) else {
+        return f64::NAN;
+    };
+    let achieved = delays.achieved(&taus);
+    let mut fork = world.clone();
+    fork.set_taus(t, &taus, &achieved);
+    match fork.advance_to(t_end, &mut ()) {
+        Ok(()) => match fork.epochs().last() {
+            Some(e) if e.t_end == t_end => delays.objective(e.cost, &achieved),
+            _ => f64::INFINITY,
+        },
+        Err(_) => f64::INFINITY,
+    }
+}
+
+fn argmin(points: &[Candidate]) -> Option<Candidate> {
+    points
+        .iter()
+        .filter(|c| c.objective.is_finite())
+        .min_by(|a, b| a.objective.total_cmp(&b.objective))
+        .cloned()
+}
+
+fn controller_error(e: impl std::fmt::Display) -> Error {
+    Error::invalid("controller", format!("cannot start the simplex: {e}"))
+}
+
+/// Runs a controlled scenario to its end, recording the live world with `obs`; fills
+/// `exp` as windows complete (so a diverged run keeps what it measured).
+pub fn run(world: &mut CoSim, obs: &mut dyn Observer, exp: &mut Experiment) -> Result<()> {
+    let scenario = world.scenario().clone();
+    let Some(spec) = scenario.controller.clone() else {
+        return world.run_to_end(obs);
+    };
+    let delays = Delays::new(&spec, &scenario.channels, scenario.dt);
+    let feasible = delays.feasible().map_err(controller_error)?;
+    let dsm_config = DsmConfig {
+        size: spec.dsm_size,
+        reflections: spec.reflections,
+    };
+    let mut dsm = match spec.method {
+        Method::Dsm => {
+            Some(Dsm::new(dsm_config, &spec.initial, feasible.clone()).map_err(controller_error)?)
+        }
+        _ => None,
+    };
+    let wants_nm =
+        spec.method == Method::NelderMead || spec.baselines.contains(&Method::NelderMead);
+    let mut nm = if wants_nm {
+        let config = NelderMeadConfig {
+            size: spec.dsm_size,
+            x_tolerance: scenario.dt.as_secs_f64(),
+            f_tolerance: 0.0,
+        };
+        Some(NelderMead::new(config, &spec.initial, feasible).map_err(controller_error)?)
+    } else {
+        None
+    };
+    let wants_grid = spec.method == Method::Grid || spec.baselines.contains(&Method::Grid);
+    let grid_points = if wants_grid || spec.surface_window.is_some() {
+        delays.grid(spec.grid_step)
+    } else {
+        Vec::new()
+    };
+    let no_opt = delays.equal(&spec.initial);
+    let names = channel_names(&scenario.channels);
+    let period = scenario.measurement_period;
+    let mut t = SimTime::ZERO;
+    while t < scenario.duration {
+        let t_end = SimTime(t.0 + period.0).min(scenario.duration);
+        world.advance_to(t, obs)?;
+        let live_world: &CoSim = world;
+        let eval = |x: &[f64]| evaluate(live_world, &delays, x, t, t_end);
+        let surface_here = spec.surface_window == Some(t);
+        let grid: Option<Vec<Candidate>> = (wants_grid || surface_here).then(|| {
+            let objectives: Vec<f64> = grid_points.par_iter().map(|x| eval(x)).collect();
+            grid_points
+                .iter()
+                .zip(objectives)
+                .map(|(x, objective)| Candidate {
+                    x: x.clone(),
+                    objective,
+                })
+                .collect()
+        });
+        let grid_best = grid.as_deref().and_then(argmin);
+        let mut dsm_path = Vec::new();
+        let live_x = match spec.method {
+            Method::Dsm => {
+                let d = dsm.as_mut().expect("ok: built for the DSM method");
+                match spec.measure {
+                    Measure::Lookahead => {
+                        d.iterate(|x| {
+                            let objective = eval(x);
+                            dsm_path.push(Candidate {
+                                x: x.to_vec(),
+                                objective,
+                            });
+                            objective
+                        });
+                        d.best().to_vec()
+                    }
+                    Measure::Online => d.ask().unwrap_or_else(|| d.best().to_vec()),
+                }
+            }
+            Method::Grid => grid_best
+                .as_ref()
+                .map_or_else(|| spec.initial.clone(), |c| c.x.clone()),
+            Method::NoOptimization => no_opt.clone(),
+            Method::Fixed => spec.initial.clone(),
+            Method::NelderMead => {
+                let n = nm.as_mut().expect("ok: built for Nelder–Mead");
+                nelder_mead_window(n, spec.reflections + 1, &eval);
+                n.best().to_vec()
+            }
+        };
+        let mut baselines = Vec::new();
+        for &b in &spec.baselines {
+            let candidate = match b {
+                Method::Grid => grid_best.clone().unwrap_or(Candidate {
+                    x: Vec::new(),
+                    objective: f64::NAN,
+                }),
+                Method::NelderMead => {
+                    let n = nm.as_mut().expect("ok: built for Nelder–Mead");
+                    nelder_mead_window(n, spec.reflections + 1, &eval);
+                    measured(n.best(), &eval)
+                }
+                Method::NoOptimization => measured(&no_opt, &eval),
+                Method::Fixed => measured(&spec.initial, &eval),
+                Method::Dsm => measured(&live_x, &eval),
+            };
+            baselines.push(BaselineResult {
+                name: b.name().to_string(),
+                candidate,
+            });
+        }
+        if let Some(delta) = spec.dsm_delta {
+            for i in 0..live_x.len() {
+                for (sign, word) in [(1.0, "plus"), (-1.0, "minus")] {
+                    let mut x = live_x.clone();
+                    x[i] += sign * delta;
+                    baselines.push(BaselineResult {
+                        name: format!("dsm_{}_{word}", names[i]),
+                        candidate: measured(&x, &eval),
+                    });
+                }
+            }
+        }
+        if surface_here {
+            exp.surface = grid.clone().map(|g| (t, g));
+        }
+        let taus = delays
+            .taus(&live_x)
+            .expect("ok: every method picks feasible delays");
+        let achieved = delays.achieved(&taus);
+        world.set_taus(t, &taus, &achieved);
+        let run = world.advance_to(t_end, obs);
+        let objective = match (&run, world.epochs().last()) {
+            (Ok(()), Some(e)) if e.t_end == t_end => delays.objective(e.cost, &achieved),
+            _ => f64::INFINITY,
+        };
+        if let (Method::Dsm, Measure::Online, Some(d)) = (spec.method, spec.measure, dsm.as_mut()) {
+            d.tell(objective);
+        }
+        exp.windows.push(WindowReport {
+            t_start: t,
+            t_end,
+            live: Candidate {
+                x: live_x,
+                objective,
+            },
+            baselines,
+            grid_best,
+            dsm_path,
+        });
+        run?;
+        t = t_end;
+    }
+    world.run_to_end(obs)
+}
+
+/// Up to `budget` Nelder–Mead measurements in this window (none once it has converged).
+fn nelder_mead_window(n: &mut NelderMead, budget: usize, eval: &dyn Fn(&[f64]) -> f64) {
+    for _ in 0..budget {
+        let Some(x) = n.ask() else { break };
+        n.tell(eval(&x));
+    }
+}
+
+fn measured(x: &[f64], eval: &dyn Fn(&[f64]) -> f64) -> Candidate {
+    Candidate {
+        x: x.to_vec(),
+        objective: eval(x),
+    }
+}
+
+/// Names of the controlled coordinates (the channels' names, in order).
+pub fn channel_names(channels: &[crate::scenario::model::ChannelSpec]) -> Vec<String> {
+    channels.iter().map(|c| c.name.clone()).collect()
+}
+
+/// The controller spec of a world, if any (for writers).
+pub fn spec(world: &CoSim) -> Option<&ControllerSpec> {
+    world.scenario().controller.as_ref()
+}

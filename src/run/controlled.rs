@@ -1,0 +1,265 @@
+//! The outputs a controlled run adds: per-method columns in epochs.csv, per-method mean
+//! costs in summary.json, and the controller's plots.
+
+use std::path::Path;
+
+use serde_json::{json, Value};
+
+use crate::control::experiment::{channel_names, Experiment};
+use crate::cosim::CoSim;
+use crate::error::Result;
+use crate::report::{write_heatmap, write_line_plot, Heatmap, LinePlot, Scale, Series};
+use crate::scenario::model::{ControllerSpec, Measure, Problem};
+
+fn spec(world: &CoSim) -> Option<&ControllerSpec> {
+    world.scenario().controller.as_ref()
+}
+
+/// Names of the controlled coordinates (CP: all channels but the last).
+fn controlled_names(world: &CoSim) -> Vec<String> {
+    let names = channel_names(&world.scenario().channels);
+    match spec(world).map(|s| s.problem) {
+        Some(Problem::Constrained { .. }) => names[..names.len() - 1].to_vec(),
+        _ => names,
+    }
+}
+
+/// Extra epochs.csv header columns (empty without a controller).
+pub(super) fn epoch_header(world: &CoSim, exp: &Experiment) -> String {
+    let Some(spec) = spec(world) else {
+        return String::new();
+    };
+    let mut h = format!(",objective_{}", spec.method.name());
+    for b in exp.baseline_names() {
+        h.push_str(&format!(",objective_{b}"));
+    }
+    if exp.windows.iter().any(|w| w.grid_best.is_some()) {
+        for n in controlled_names(world) {
+            h.push_str(&format!(",grid_opt_tau_{n}"));
+        }
+    }
+    h.push_str(",measurements");
+    h
+}
+
+/// Extra epochs.csv columns of window `i`.
+pub(super) fn epoch_row(world: &CoSim, exp: &Experiment, i: usize) -> String {
+    if spec(world).is_none() {
+        return String::new();
+    }
+    let grid = exp.windows.iter().any(|w| w.grid_best.is_some());
+    let dims = controlled_names(world).len();
+    let Some(w) = exp.windows.get(i) else {
+        let blanks = 1 + exp.baseline_names().len() + if grid { dims } else { 0 } + 1;
+        return ",".repeat(blanks);
+    };
+    let mut r = format!(",{}", w.live.objective);
+    for b in &w.baselines {
+        r.push_str(&format!(",{}", b.candidate.objective));
+    }
+    if grid {
+        match &w.grid_best {
+            Some(c) => c.x.iter().for_each(|x| r.push_str(&format!(",{x}"))),
+            None => r.push_str(&",".repeat(dims)),
+        }
+    }
+    r.push_str(&format!(",{}", w.dsm_path.len()));
+    r
+}
+
+/// Adds the controller's settings and `mean_cost_<method>` keys to summary.json.
+pub(super) fn summarize(world: &CoSim, exp: &Experiment, summary: &mut Value) {
+    let Some(spec) = spec(world) else { return };
+    let live = spec.method.name();
+    let problem = match spec.problem {
+        Problem::Constrained { budget } => json!({"kind": "cp", "budget": budget}),
+        Problem::Unconstrained { penalty } => json!({"kind": "up", "penalty": penalty}),
+    };
+    summary["controller"] = json!({
+        "method": live,
+        "problem": problem,
+        "measure": match spec.measure { Measure::Lookahead => "lookahead", Measure::Online => "online" },
+        "dsm_size": spec.dsm_size,
+        "reflections": spec.reflections,
+        "tau_min": spec.tau_min,
+        "tau_max": spec.tau_max,
+        "windows": exp.windows.len(),
+        "cost_meaning": match spec.problem {
+            Problem::Constrained { .. } => "window cost C [m]",
+            Problem::Unconstrained { .. } => "C + b Σ k/τ (the UP objective)",
+        },
+    });
+    let mut names = vec![live.to_string()];
+    names.extend(exp.baseline_names());
+    for n in names {
+        if let Some(m) = exp.mean(&n, live) {
+            summary[format!("mean_cost_{n}")] = json!(m);
+        }
+    }
+}
+
+fn step_series(label: String, exp: &Experiment, f: &dyn Fn(usize) -> f64) -> Series {
+    let mut points: Vec<(f64, f64)> = exp
+        .windows
+        .iter()
+        .enumerate()
+        .map(|(i, w)| (w.t_start.as_secs_f64(), f(i)))
+        .collect();
+    if let Some(w) = exp.windows.last() {
+        points.push((w.t_end.as_secs_f64(), f(exp.windows.len() - 1)));
+    }
+    Series { label, points }
+}
+
+/// cost_methods.svg, delays_optimum.svg and (with a surface window) surface.svg.
+pub(super) fn write_plots(out: &Path, world: &CoSim, exp: &Experiment) -> Result<()> {
+    let Some(spec) = spec(world) else {
+        return Ok(());
+    };
+    if exp.windows.is_empty() {
+        return Ok(());
+    }
+    let name = &world.scenario().name;
+    let live = spec.method.name();
+    let cost_label = match spec.problem {
+        Problem::Constrained { .. } => "cost C [m]",
+        Problem::Unconstrained { .. } => "objective C + bΣk/τ [m]",
+    };
+    let mut series = vec![step_series(live.to_string(), exp, &|i| {
+        exp.windows[i].live.objective
+    })];
+    for (j, b) in exp.baseline_names().into_iter().enumerate() {
+        series.push(step_series(b, exp, &|i| {
+            exp.windows[i]
+                .baselines
+                .get(j)
+                .map_or(f64::NAN, |b| b.candidate.objective)
+        }));
+    }
+    write_line_plot(
+        &out.join("cost_methods.svg"),
+        &LinePlot {
+            title: &format!("{name} — cost per window by method"),
+            x_label: "time t [s]",
+            y_label: cost_label,
+            series: &series,
+            x_scale: Scale::Linear,
+            y_scale: Scale::Linear,
+            step: true,
+            markers: false,
+        },
+    )?;
+    let names = controlled_names(world);
+    let mut delays = Vec::new();
+    for (d, n) in names.iter().enumerate() {
+        delays.push(step_series(format!("{live}: {n}"), exp, &|i| {
+            exp.windows[i].live.x.get(d).map_or(f64::NAN, |x| x * 1e3)
+        }));
+        if exp.windows.iter().any(|w| w.grid_best.is_some()) {
+            delays.push(step_series(format!("grid optimum: {n}"), exp, &|i| {
+                exp.windows[i]
+                    .grid_best
+                    .as_ref()
+                    .and_then(|c| c.x.get(d))
+                    .map_or(f64::NAN, |x| x * 1e3)
+            }));
+        }
+    }
+    write_line_plot(
+        &out.join("delays_optimum.svg"),
+        &LinePlot {
+            title: &format!("{name} — controlled delays and the grid optimum"),
+            x_label: "time t [s]",
+            y_label: "delay τ [ms]",
+            series: &delays,
+            x_scale: Scale::Linear,
+            y_scale: Scale::Linear,
+            step: true,
+            markers: false,
+        },
+    )?;
+    write_surface(out, world, exp, &names)
+}
+
+fn write_surface(out: &Path, world: &CoSim, exp: &Experiment, names: &[String]) -> Result<()> {
+    let Some((t, grid)) = &exp.surface else {
+        return Ok(());
+    };
+    let name = &world.scenario().name;
+    let window = exp.windows.iter().find(|w| w.t_start == *t);
+    let path: Vec<(f64, f64)> = window
+        .map(|w| {
+            w.dsm_path
+                .iter()
+                .map(|c| (c.x[0] * 1e3, c.objective))
+                .collect()
+        })
+        .unwrap_or_default();
+    let t0 = t.as_secs_f64();
+    let t1 = window.map_or(t0, |w| w.t_end.as_secs_f64());
+    let title = format!("{name} — cost surface over [{t0}, {t1}) s with the DSM path");
+    if names.len() == 1 {
+        let curve = Series {
+            label: "grid search".into(),
+            points: grid.iter().map(|c| (c.x[0] * 1e3, c.objective)).collect(),
+        };
+        let dsm = Series {
+            label: "DSM candidates (in order)".into(),
+            points: path,
+        };
+        return write_line_plot(
+            &out.join("surface.svg"),
+            &LinePlot {
+                title: &title,
+                x_label: &format!("controlled delay {} [ms]", names[0]),
+                y_label: "window objective [m]",
+                series: &[curve, dsm],
+                x_scale: Scale::Linear,
+                y_scale: Scale::Linear,
+                step: false,
+                markers: true,
+            },
+        );
+    }
+    if names.len() != 2 {
+        return Ok(());
+    }
+    // 2-D: a heatmap over the grid axes; infeasible cells stay missing.
+    let mut xs: Vec<f64> = grid.iter().map(|c| c.x[0]).collect();
+    let mut ys: Vec<f64> = grid.iter().map(|c| c.x[1]).collect();
+    for v in [&mut xs, &mut ys] {
+        v.sort_by(f64::total_cmp);
+        v.dedup();
+    }
+    let mut values = vec![vec![f64::NAN; xs.len()]; ys.len()];
+    for c in grid {
+        let ix = xs.iter().position(|&x| x == c.x[0]);
+        let iy = ys.iter().position(|&y| y == c.x[1]);
+        if let (Some(ix), Some(iy)) = (ix, iy) {
+            values[iy][ix] = c.objective;
+        }
+    }
+    let overlay: Vec<(f64, f64)> = window
+        .map(|w| {
+            w.dsm_path
+                .iter()
+                .map(|c| (c.x[0] * 1e3, c.x[1] * 1e3))
+                .collect()
+        })
+        .unwrap_or_default();
+    let xs_ms: Vec<f64> = xs.iter().map(|x| x * 1e3).collect();
+    let ys_ms: Vec<f64> = ys.iter().map(|y| y * 1e3).collect();
+    write_heatmap(
+        &out.join("surface.svg"),
+        &Heatmap {
+            title: &title,
+            x_label: &format!("{} [ms]", names[0]),
+            y_label: &format!("{} [ms]", names[1]),
+            value_label: "window objective [m]",
+            x: &xs_ms,
+            y: &ys_ms,
+            values: &values,
+            path_overlay: &overlay,
+        },
+    )
+}

@@ -1,0 +1,243 @@
+//! The controller stage: `controller` checked against the channels it drives.
+
+use std::collections::BTreeSet;
+
+use super::checks::{foreign, num, positive, required, time};
+use crate::error::{Error, Result};
+use crate::kernel::SimTime;
+use crate::scenario::file::{ControllerFile, MeasureFile, MethodFile, ProblemKind, RampFile};
+use crate::scenario::model::{ChannelSpec, ControllerSpec, Measure, Method, Problem, Ramp};
+
+fn method(m: MethodFile) -> Method {
+    match m {
+        MethodFile::Dsm => Method::Dsm,
+        MethodFile::Grid => Method::Grid,
+        MethodFile::NoOpt => Method::NoOptimization,
+        MethodFile::Fixed => Method::Fixed,
+        MethodFile::NelderMead => Method::NelderMead,
+    }
+}
+
+/// A force's `ramp`.
+pub(super) fn ramp(path: &str, r: &RampFile) -> Result<Ramp> {
+    let t0 = time(&format!("{path}.t0"), r.t0)?;
+    let t1 = time(&format!("{path}.t1"), r.t1)?;
+    if t1 <= t0 {
+        return Err(Error::invalid(
+            format!("{path}.t1"),
+            format!(
+                "must be after t0 (got t1 {} s ≤ t0 {} s)",
+                num(r.t1),
+                num(r.t0)
+            ),
+        ));
+    }
+    for (key, v) in [("a0", r.a0), ("a1", r.a1)] {
+        if !v.is_finite() {
+            return Err(Error::invalid(
+                format!("{path}.{key}"),
+                format!("must be a finite number (got {})", num(v)),
+            ));
+        }
+    }
+    Ok(Ramp {
+        t0,
+        t1,
+        a0: r.a0,
+        a1: r.a1,
+    })
+}
+
+/// The `controller` section, given the validated channels, `dt`, duration and period.
+pub(super) fn controller(
+    c: &ControllerFile,
+    channels: &[ChannelSpec],
+    dt: SimTime,
+    duration: SimTime,
+    period: SimTime,
+) -> Result<ControllerSpec> {
+    let n = channels.len();
+    let problem = match c.problem {
+        ProblemKind::Cp => {
+            if c.penalty.is_some() {
+                return Err(foreign("controller.penalty", "cp"));
+            }
+            let budget = c
+                .budget
+                .ok_or_else(|| required("controller.budget", "cp"))?;
+            if n < 2 {
+                return Err(Error::invalid(
+                    "controller.problem",
+                    format!("cp controls n − 1 delays and needs at least 2 channels (got {n})"),
+                ));
+            }
+            Problem::Constrained {
+                budget: positive("controller.budget", budget)?,
+            }
+        }
+        ProblemKind::Up => {
+            if c.budget.is_some() {
+                return Err(foreign("controller.budget", "up"));
+            }
+            let penalty = c
+                .penalty
+                .ok_or_else(|| required("controller.penalty", "up"))?;
+            if !(penalty.is_finite() && penalty >= 0.0) {
+                return Err(Error::invalid(
+                    "controller.penalty",
+                    format!("must be ≥ 0 (got {})", num(penalty)),
+                ));
+            }
+            if n < 1 {
+                return Err(Error::invalid(
+                    "controller",
+                    "needs channels to control (the scenario has none)",
+                ));
+            }
+            Problem::Unconstrained { penalty }
+        }
+    };
+    let dt_s = dt.as_secs_f64();
+    let tau_min = positive("controller.tau_min", c.tau_min.unwrap_or(dt_s))?;
+    if tau_min < dt_s {
+        return Err(Error::invalid(
+            "controller.tau_min",
+            format!("must be ≥ dt = {} s (got {})", num(dt_s), num(tau_min)),
+        ));
+    }
+    let tau_max = positive("controller.tau_max", c.tau_max)?;
+    if tau_max <= tau_min {
+        return Err(Error::invalid(
+            "controller.tau_max",
+            format!(
+                "must exceed tau_min {} s (got {})",
+                num(tau_min),
+                num(tau_max)
+            ),
+        ));
+    }
+    let controlled = match problem {
+        Problem::Constrained { .. } => n - 1,
+        Problem::Unconstrained { .. } => n,
+    };
+    let initial = match &c.initial {
+        Some(v) => v.clone(),
+        None => channels[..controlled]
+            .iter()
+            .map(|ch| ch.tau.as_secs_f64())
+            .collect(),
+    };
+    if initial.len() != controlled {
+        return Err(Error::invalid(
+            "controller.initial",
+            format!(
+                "needs {controlled} values (one per controlled channel) (got {})",
+                initial.len()
+            ),
+        ));
+    }
+    for (i, &x) in initial.iter().enumerate() {
+        if !(x.is_finite() && x >= tau_min && x <= tau_max) {
+            return Err(Error::invalid(
+                format!("controller.initial[{i}]"),
+                format!(
+                    "must lie in [tau_min, tau_max] = [{}, {}] s (got {})",
+                    num(tau_min),
+                    num(tau_max),
+                    num(x)
+                ),
+            ));
+        }
+    }
+    if let Problem::Constrained { budget } = problem {
+        let used: f64 = initial.iter().zip(channels).map(|(x, ch)| ch.k / x).sum();
+        let last = &channels[n - 1];
+        let left = budget - used;
+        if !(left > 0.0 && last.k / left <= tau_max) {
+            return Err(Error::invalid(
+                "controller.initial",
+                format!(
+                    "infeasible: the controlled channels use {} of the budget {} /s, leaving \
+                     the last channel a delay above tau_max {} s",
+                    num(used),
+                    num(budget),
+                    num(tau_max)
+                ),
+            ));
+        }
+    }
+    let dsm_size = positive("controller.dsm.size", c.dsm.size)?;
+    if c.dsm.reflections == 0 {
+        return Err(Error::invalid(
+            "controller.dsm.reflections",
+            "must be ≥ 1 (got 0)",
+        ));
+    }
+    let live = method(c.method);
+    let mut seen = BTreeSet::new();
+    let mut baselines = Vec::new();
+    for (i, &b) in c.baselines.iter().enumerate() {
+        let m = method(b);
+        if m == live {
+            return Err(Error::invalid(
+                format!("controller.baselines[{i}]"),
+                format!("\"{}\" is the live method already", m.name()),
+            ));
+        }
+        if !seen.insert(m) {
+            return Err(Error::invalid(
+                format!("controller.baselines[{i}]"),
+                format!("\"{}\" is listed twice", m.name()),
+            ));
+        }
+        baselines.push(m);
+    }
+    let dsm_delta = match c.dsm_delta {
+        None => None,
+        Some(d) => {
+            if live != Method::Dsm {
+                return Err(Error::invalid(
+                    "controller.dsm_delta",
+                    "needs \"method\": \"dsm\"",
+                ));
+            }
+            Some(positive("controller.dsm_delta", d)?)
+        }
+    };
+    let grid_step = positive("controller.grid_step", c.grid_step)?;
+    let surface_window = match c.surface_window {
+        None => None,
+        Some(s) => {
+            let t = time("controller.surface_window", s)?;
+            if t >= duration || t.0 % period.0 != 0 {
+                return Err(Error::invalid(
+                    "controller.surface_window",
+                    format!(
+                        "must be the start of a measurement window before the end (got {} s; \
+                         windows start every {} s)",
+                        num(s),
+                        num(period.as_secs_f64())
+                    ),
+                ));
+            }
+            Some(t)
+        }
+    };
+    Ok(ControllerSpec {
+        method: live,
+        problem,
+        measure: match c.measure {
+            MeasureFile::Lookahead => Measure::Lookahead,
+            MeasureFile::Online => Measure::Online,
+        },
+        tau_min,
+        tau_max,
+        initial,
+        dsm_size,
+        reflections: c.dsm.reflections,
+        baselines,
+        dsm_delta,
+        grid_step,
+        surface_window,
+    })
+}
