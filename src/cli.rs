@@ -1,7 +1,8 @@
-//! The command line: `dsmcosim validate FILE`, `dsmcosim run FILE --out DIR`.
+//! The command line: `dsmcosim validate FILE`, `dsmcosim run FILE --out DIR`,
+//! `dsmcosim check FILE --against DIR`.
 //!
 //! Exit codes: 0 success, 1 I/O failure, 2 bad input (scenario or arguments),
-//! 3 a run that diverged or failed numerically.
+//! 3 a run that diverged or failed numerically, 4 `check` found a difference.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -35,6 +36,62 @@ pub enum Command {
         /// Output directory (created if missing; files in it are replaced atomically).
         #[arg(long)]
         out: PathBuf,
+    },
+    /// Rerun a scenario and compare it with a stored run, bit for bit by default.
+    ///
+    /// Writes the new run beside the stored one, into DIR.new (its previous outputs
+    /// are replaced), and keeps it there for inspection. Compares the digests in both
+    /// summary.json files, then trace.csv, epochs.csv and any other CSV both runs have,
+    /// record by record: exactly (equal text, i.e. equal bits) unless --tolerance is
+    /// given. On a mismatch prints the first differing record: file, time, column,
+    /// stored and new value, absolute and relative difference.
+    ///
+    /// Exit codes: 0 match (or within the tolerance), 4 mismatch, 1 stored run missing
+    /// or unreadable (DIR, summary.json, a CSV) or an I/O failure, 2 bad scenario, bad
+    /// --tolerance or a summary.json that is not a run summary.
+    Check {
+        /// Scenario file (JSON).
+        scenario: PathBuf,
+        /// Directory of the stored run (as written by `dsmcosim run --out DIR`).
+        #[arg(long, value_name = "DIR")]
+        against: PathBuf,
+        /// Compare numbers relatively: |a − b| ≤ X·max(|a|, |b|). A run whose values all
+        /// agree within X passes even if its digest differs.
+        #[arg(long, value_name = "X", allow_negative_numbers = true)]
+        tolerance: Option<f64>,
+    },
+    /// Speed–accuracy study: turn dt, integrator, J_s solve, stabilizer (and ghosts,
+    /// network on partitioned scenes) one at a time and measure each variant against a
+    /// monolithic RK4 reference at dt/20.
+    ///
+    /// Writes tradeoff.csv, tradeoff.md, work_precision.svg and pareto.svg into DIR.
+    /// Exit codes: 0 done (diverged variants are rows, not failures), 1 I/O failure,
+    /// 2 bad scenario or --duration, 3 the reference itself failed.
+    Tradeoff {
+        /// Scenario file (JSON).
+        scenario: PathBuf,
+        /// Output directory (created if missing).
+        #[arg(long, value_name = "DIR")]
+        out: PathBuf,
+        /// Horizon [s] instead of the scenario's duration (rounded down to a whole
+        /// number of the sweep's largest dt). Chaotic scenes need a short one.
+        #[arg(long, value_name = "S")]
+        duration: Option<f64>,
+    },
+    /// Stability map: run the scenario over SMC μ (1 ms … 1 s) × dt (0.1 … 10 ms) and
+    /// classify each cell: 0 max|w| ≤ ε, 1 ran with max|w| > ε, 2 diverged.
+    ///
+    /// Writes stability_map.csv, stability_map.md, stability_map.svg and
+    /// stability_max_w.svg into DIR.
+    StabilityMap {
+        /// Scenario file (JSON) with an SMC stabilizer.
+        scenario: PathBuf,
+        /// Output directory (created if missing).
+        #[arg(long, value_name = "DIR")]
+        out: PathBuf,
+        /// Horizon [s] instead of the scenario's duration (rounded down to 10 ms).
+        #[arg(long, value_name = "S")]
+        duration: Option<f64>,
     },
 }
 
@@ -83,5 +140,24 @@ pub fn execute(command: Command) -> crate::Result<()> {
             println!("wrote {}", out.display());
             Ok(())
         }
+        Command::Check {
+            scenario,
+            against,
+            tolerance,
+        } => {
+            let s = scenario::load(&scenario)?;
+            println!("{}", crate::check::execute(&s, &against, tolerance)?);
+            Ok(())
+        }
+        Command::Tradeoff {
+            scenario,
+            out,
+            duration,
+        } => crate::tradeoff::command_tradeoff(&scenario, &out, duration),
+        Command::StabilityMap {
+            scenario,
+            out,
+            duration,
+        } => crate::tradeoff::command_stability_map(&scenario, &out, duration),
     }
 }

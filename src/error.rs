@@ -47,6 +47,10 @@ pub enum Error {
         /// What failed.
         message: String,
     },
+    /// `dsmcosim check`: the rerun differs from the stored run; the message names the
+    /// first differing record.
+    #[error("{0}")]
+    Mismatch(String),
 }
 
 /// Where and how a run diverged.
@@ -108,12 +112,13 @@ impl Error {
     }
 
     /// Process exit code: 2 for bad input, 3 for a diverged or numerically failed run,
-    /// 1 for I/O failures.
+    /// 1 for I/O failures, 4 for a `check` that found a difference.
     pub fn exit_code(&self) -> u8 {
         match self {
             Error::Parse { .. } | Error::Invalid { .. } => 2,
             Error::Diverged(_) | Error::Numerical { .. } => 3,
             Error::Io { .. } => 1,
+            Error::Mismatch(_) => 4,
         }
     }
 }

@@ -26,6 +26,7 @@
 // as links.
 #![allow(rustdoc::broken_intra_doc_links)]
 
+pub mod check;
 pub mod cli;
 pub mod control;
 pub mod cosim;
@@ -40,5 +41,6 @@ pub mod report;
 pub mod run;
 pub mod scenario;
 pub mod trace;
+pub mod tradeoff;
 
 pub use error::{Error, Result};

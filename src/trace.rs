@@ -1,6 +1,8 @@
 //! What a run records: the bit-exact digest ([`digest`]) and the decimated CSV trace
-//! with the series kept for plots ([`recorder`]).
+//! with the series kept for plots ([`recorder`]); and the record-by-record comparison
+//! of two runs' CSV files ([`compare`], used by `dsmcosim check`).
 
+pub mod compare;
 pub mod digest;
 pub mod recorder;
 

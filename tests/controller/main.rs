@@ -151,3 +151,44 @@ fn a_controller_needs_valid_settings() {
         "controller.surface_window",
     );
 }
+
+/// A shipped experiment, shortened to `duration` s, with only the listed baselines.
+fn shipped(name: &str, duration: f64, baselines: Value) -> Scenario {
+    let path = format!("{}/scenarios/{name}.json", env!("CARGO_MANIFEST_DIR"));
+    let mut v: Value =
+        serde_json::from_str(&std::fs::read_to_string(path).expect("scenario")).expect("json");
+    v["duration"] = json!(duration);
+    let c = v["controller"].as_object_mut().expect("controller");
+    c.remove("surface_window");
+    c.remove("dsm_delta");
+    c.insert("baselines".into(), baselines);
+    parse_str(&v.to_string(), name).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+#[test]
+fn time_cp_grid_optimum_never_gives_states_the_smaller_delay() {
+    // Thesis: constraint forces get the smaller delay. Under the 400 Hz budget the
+    // force delay is below the state delay exactly when τ_state > 5 ms.
+    let (_, exp) = run(&shipped("grid16_time_cp", 6.0, json!(["grid"])));
+    for w in &exp.windows {
+        let tau_state = w.grid_best.as_ref().expect("grid").x[0];
+        assert!(
+            tau_state >= 0.005 - 1e-12,
+            "window {}: τ_state {tau_state}",
+            w.t_start
+        );
+    }
+}
+
+#[test]
+fn dsm_beats_no_optimization_on_the_unconstrained_problems() {
+    for name in ["grid16_space_up", "grid16_time_up"] {
+        let (_, exp) = run(&shipped(name, 8.0, json!(["no_opt"])));
+        let dsm = exp.mean("dsm", "dsm").expect("dsm");
+        let no_opt = exp.mean("no_opt", "dsm").expect("no_opt");
+        assert!(
+            dsm < no_opt,
+            "{name}: DSM {dsm} vs no-optimization {no_opt}"
+        );
+    }
+}

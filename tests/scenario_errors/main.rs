@@ -311,7 +311,7 @@ fn unknown_keys_are_rejected() {
     invalid(set_part("/partition/link_owners", json!([{"link": 3, "node": 2, "why": 1}])), "partition.link_owners[0].why", "unknown field");
     invalid(set_part("/network/slots", json!([])), "network.slots", "unknown field `slots`");
     invalid(set_part("/channels/1/period", json!(0.01)), "channels[1].period", "unknown field");
-    invalid(set("/controller", json!({})), "controller", "unknown field");
+    invalid(set("/controller", json!({"problem": "cp", "tau_max": 0.05, "gain": 1})), "controller.gain", "unknown field");
     invalid(set("/model/bodies/1/colour", json!(1)), "model.bodies[1].colour", "unknown field");
     invalid(set("/model/links/0/stiffness", json!(1)), "model.links[0].stiffness", "unknown");
     invalid(set("/forces/1/to", json!(2)), "forces[1].to", "unknown field `to`");

@@ -1,0 +1,51 @@
+#!/usr/bin/env python3
+"""Prints the figures results/README.md quotes for the thesis experiments, from the
+stored runs in results/<scenario>/ (summary.json and epochs.csv).
+Usage: results/summarize_experiments.py [RESULTS_DIR]"""
+import csv, json, os, sys
+
+root = sys.argv[1] if len(sys.argv) > 1 else os.path.dirname(os.path.abspath(__file__))
+names = ["grid16_space_cp", "grid16_space_cp_ds2", "grid16_space_cp_T10", "grid16_space_cp_ramp",
+         "grid16_space_up", "grid16_time_cp", "grid16_time_up"]
+
+def mean(xs):
+    xs = [x for x in xs if x == x]
+    return sum(xs) / len(xs) if xs else float("nan")
+
+for n in names:
+    d = os.path.join(root, n)
+    if not os.path.isfile(os.path.join(d, "summary.json")):
+        print(f"{n}: not found"); continue
+    s = json.load(open(os.path.join(d, "summary.json")))
+    rows = list(csv.DictReader(open(os.path.join(d, "epochs.csv"))))
+    costs = {k[len("mean_cost_"):]: v for k, v in s.items() if k.startswith("mean_cost_")}
+    order = sorted(costs, key=costs.get)
+    print(f"== {n} ({s['status']}, {s['controller']['problem']['kind']}, D_s = {s['controller']['dsm_size']}, "
+          f"T = {float(rows[0]['t_end']) - float(rows[0]['t_start']):g} s)")
+    print("   mean cost by method (best first): " + ", ".join(f"{m} {costs[m]:.4f}" for m in order))
+    if "no_opt" in costs:
+        print(f"   dsm / no_opt = {costs['dsm'] / costs['no_opt']:.3f}; dsm / grid = {costs['dsm'] / costs['grid']:.3f}")
+    chans = [c["name"] for c in s["channels"]]
+    opt_cols = [c for c in rows[0] if c.startswith("grid_opt_tau_")]
+    for r in rows:
+        if float(r["t_start"]) == 10.0 or (len(rows) < 10 and float(r["t_start"]) <= 10.0 < float(r["t_end"])):
+            live = ", ".join(f"{c} {float(r[f'tau_{c}_requested']) * 1e3:.2f} ms" for c in chans)
+            opt = ", ".join(f"{c[len('grid_opt_tau_'):]} {float(r[c]) * 1e3:.0f} ms" for c in opt_cols)
+            print(f"   window starting 10 s: grid optimum {opt}; DSM ran at {live}")
+    # Which channel is faster under the grid optimum, over the windows while body 1 is driven.
+    if s["controller"]["problem"]["kind"] == "cp" and opt_cols:
+        budget = s["controller"]["problem"]["budget"]
+        early = [r for r in rows if float(r["t_end"]) <= 12.0]
+        faster_first = 0
+        for r in early:
+            t1 = float(r[opt_cols[0]]); t2 = 1.0 / (budget - 1.0 / t1)
+            faster_first += t1 < t2
+        print(f"   windows in [0, 12) s where the grid optimum gives {chans[0]} the smaller delay: "
+              f"{faster_first} of {len(early)}")
+        gap = mean([abs(float(r[f'tau_{chans[0]}_requested']) - float(r[opt_cols[0]])) for r in rows])
+        print(f"   mean |DSM {chans[0]} − grid optimum| = {gap * 1e3:.2f} ms")
+    elif opt_cols:
+        faster = sum(float(r[opt_cols[1]]) < float(r[opt_cols[0]]) for r in rows)
+        print(f"   windows where the grid optimum gives {opt_cols[1][len('grid_opt_tau_'):]} the smaller delay: "
+              f"{faster} of {len(rows)}; DSM: "
+              f"{sum(float(r[f'tau_{chans[1]}_requested']) < float(r[f'tau_{chans[0]}_requested']) for r in rows)} of {len(rows)}")
