@@ -19,14 +19,19 @@ pub struct Progress {
 }
 
 impl Progress {
-    /// A bar over `total` units (hidden until [`QUIET_FOR`] has passed).
+    /// A bar over `total` steps (hidden until [`QUIET_FOR`] has passed).
     pub fn new(total: u64) -> Progress {
+        Progress::with_unit(total, "steps")
+    }
+
+    /// A bar over `total` units named `unit` (e.g. `windows`).
+    pub fn with_unit(total: u64, unit: &str) -> Progress {
         use std::io::IsTerminal;
         let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::hidden());
         bar.set_style(
-            ProgressStyle::with_template(
-                "{bar:40} {pos}/{len} steps  {elapsed} elapsed, ETA {eta}",
-            )
+            ProgressStyle::with_template(&format!(
+                "{{bar:40}} {{pos}}/{{len}} {unit}  {{elapsed}} elapsed, ETA {{eta}}"
+            ))
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
         );
         Progress {
@@ -37,9 +42,10 @@ impl Progress {
         }
     }
 
-    /// Sets the position (cheap: only every 1024th call looks at the clock).
+    /// Sets the position. Call it every so often (per slice of steps, per window), not
+    /// per step: each call reads the wall clock.
     pub fn tick(&mut self, pos: u64) {
-        if !self.enabled || pos % 1024 != 0 {
+        if !self.enabled {
             return;
         }
         if !self.shown && self.started.elapsed() > QUIET_FOR {

@@ -168,6 +168,8 @@ pub fn run(world: &mut CoSim, obs: &mut dyn Observer, exp: &mut Experiment) -> R
     let no_opt = delays.equal(&spec.initial);
     let names = channel_names(&scenario.channels);
     let period = scenario.measurement_period;
+    let windows = scenario.duration.0.div_ceil(period.0);
+    let mut progress = crate::progress::Progress::with_unit(windows, "windows");
     let mut t = SimTime::ZERO;
     while t < scenario.duration {
         let t_end = SimTime(t.0 + period.0).min(scenario.duration);
@@ -278,8 +280,10 @@ pub fn run(world: &mut CoSim, obs: &mut dyn Observer, exp: &mut Experiment) -> R
             dsm_path,
         });
         run?;
+        progress.tick(exp.windows.len() as u64);
         t = t_end;
     }
+    progress.finish();
     world.run_to_end(obs)
 }
 
