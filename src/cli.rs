@@ -36,6 +36,22 @@ pub enum Command {
         /// Output directory (created if missing; files in it are replaced atomically).
         #[arg(long)]
         out: PathBuf,
+        /// Write the complete run state into OUT/checkpoints/ every S seconds of
+        /// simulated time (at the next window boundary for controlled runs).
+        #[arg(long, value_name = "S")]
+        checkpoint_every: Option<f64>,
+    },
+    /// Finish a run from one of its checkpoints, with the same digest as an
+    /// uninterrupted run; writes every output (the trace from t = 0) into --out.
+    Resume {
+        /// A checkpoint file written by `run --checkpoint-every`.
+        checkpoint: PathBuf,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// Keep writing checkpoints every S seconds of simulated time.
+        #[arg(long, value_name = "S")]
+        checkpoint_every: Option<f64>,
     },
     /// Rerun a scenario and compare it with a stored run, bit for bit by default.
     ///
@@ -107,6 +123,36 @@ pub fn main() -> ExitCode {
     }
 }
 
+/// The run options from the command line.
+fn run_options(checkpoint_every: Option<f64>) -> crate::Result<crate::run::RunOptions> {
+    let checkpoint_every = match checkpoint_every {
+        None => None,
+        Some(secs) => match crate::kernel::SimTime::from_secs_f64(secs) {
+            Some(t) if t.0 > 0 => Some(t),
+            _ => {
+                return Err(crate::Error::invalid(
+                    "--checkpoint-every",
+                    format!("must be a positive number of seconds (got {secs})"),
+                ))
+            }
+        },
+    };
+    Ok(crate::run::RunOptions { checkpoint_every })
+}
+
+fn report(name: &str, outcome: &crate::run::Outcome, out: &std::path::Path) {
+    println!(
+        "{}: {} steps in {:.3} s wall; max |w| = {:.3e} m; mean cost = {:.3e} m; digest {}",
+        name,
+        outcome.steps,
+        outcome.wall_seconds,
+        outcome.max_constraint_violation,
+        outcome.mean_cost,
+        outcome.digest
+    );
+    println!("wrote {}", out.display());
+}
+
 /// Runs one subcommand.
 pub fn execute(command: Command) -> crate::Result<()> {
     match command {
@@ -125,19 +171,25 @@ pub fn execute(command: Command) -> crate::Result<()> {
             );
             Ok(())
         }
-        Command::Run { scenario, out } => {
+        Command::Run {
+            scenario,
+            out,
+            checkpoint_every,
+        } => {
+            let options = run_options(checkpoint_every)?;
             let s = scenario::load(&scenario)?;
-            let outcome = crate::run::run(&s, &out)?;
-            println!(
-                "{}: {} steps in {:.3} s wall; max |w| = {:.3e} m; mean cost = {:.3e} m; digest {}",
-                s.name,
-                outcome.steps,
-                outcome.wall_seconds,
-                outcome.max_constraint_violation,
-                outcome.mean_cost,
-                outcome.digest
-            );
-            println!("wrote {}", out.display());
+            let outcome = crate::run::run_with(&s, &out, options)?;
+            report(&s.name, &outcome, &out);
+            Ok(())
+        }
+        Command::Resume {
+            checkpoint,
+            out,
+            checkpoint_every,
+        } => {
+            let options = run_options(checkpoint_every)?;
+            let outcome = crate::run::resume(&checkpoint, &out, options)?;
+            report(&checkpoint.display().to_string(), &outcome, &out);
             Ok(())
         }
         Command::Check {

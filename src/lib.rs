@@ -27,6 +27,7 @@
 #![allow(rustdoc::broken_intra_doc_links)]
 
 pub mod check;
+pub mod checkpoint;
 pub mod cli;
 pub mod control;
 pub mod cosim;

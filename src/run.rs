@@ -11,7 +11,7 @@ use std::time::Instant;
 
 use serde_json::json;
 
-use crate::control::experiment::Experiment;
+use crate::control::experiment::{Controller, Experiment};
 use crate::cosim::CoSim;
 use crate::error::{Error, Result};
 use crate::kernel::SimTime;
@@ -41,8 +41,21 @@ pub struct Outcome {
     pub events: u64,
 }
 
+/// Options of a run beyond its scenario.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct RunOptions {
+    /// Write a checkpoint into `OUT/checkpoints/` every this much simulated time (at the
+    /// first window boundary at or after each multiple, for controlled runs).
+    pub checkpoint_every: Option<SimTime>,
+}
+
 /// Runs `scenario` and writes its outputs into `out`.
 pub fn run(scenario: &Scenario, out: &Path) -> Result<Outcome> {
+    run_with(scenario, out, RunOptions::default())
+}
+
+/// Runs `scenario` with `options` and writes its outputs into `out`.
+pub fn run_with(scenario: &Scenario, out: &Path, options: RunOptions) -> Result<Outcome> {
     create_dir_all(out)?;
     let trace_path = out.join("trace.csv");
     let file = AtomicFile::create(&trace_path)?;
@@ -56,16 +69,46 @@ pub fn run(scenario: &Scenario, out: &Path) -> Result<Outcome> {
         &scenario.output.plot_bodies,
     )
     .map_err(|e| Error::io(&trace_path, e))?;
-    let mut world = CoSim::new(scenario);
+    if options.checkpoint_every.is_some() {
+        recorder.keep_lines();
+    }
+    let world = CoSim::new(scenario);
+    let controller = Controller::new(scenario)?;
+    finish(out, world, recorder, controller, options)
+}
+
+/// Finishes the run saved in the checkpoint at `path`, writing every output into `out`
+/// (the trace from t = 0: the checkpoint carries the lines written before it).
+pub fn resume(path: &Path, out: &Path, options: RunOptions) -> Result<Outcome> {
+    let cp = crate::checkpoint::read(path)?;
+    create_dir_all(out)?;
+    let trace_path = out.join("trace.csv");
+    let mut recorder = cp.recorder;
+    recorder
+        .reattach(AtomicFile::create(&trace_path)?)
+        .map_err(|e| Error::io(&trace_path, e))?;
+    finish(out, cp.world, recorder, cp.controller, options)
+}
+
+/// Runs the world from where it is to its end, then writes every output.
+fn finish(
+    out: &Path,
+    mut world: CoSim,
+    mut recorder: Recorder,
+    mut controller: Option<Controller>,
+    options: RunOptions,
+) -> Result<Outcome> {
     let started = Instant::now();
-    let mut experiment = Experiment::default();
-    let result = if scenario.controller.is_some() {
-        crate::control::experiment::run(&mut world, &mut recorder, &mut experiment)
-    } else {
-        drive(&mut world, &mut recorder)
-    };
+    let result = drive(
+        out,
+        &mut world,
+        &mut recorder,
+        controller.as_mut(),
+        options,
+    );
     let wall_seconds = started.elapsed().as_secs_f64();
     recorder.commit()?;
+    let experiment = controller.map(|c| c.experiment).unwrap_or_default();
     let outcome = Outcome {
         digest: recorder.digest(),
         steps: world.steps_done().saturating_sub(1),
@@ -85,18 +128,46 @@ pub fn run(scenario: &Scenario, out: &Path) -> Result<Outcome> {
     result.map(|()| outcome)
 }
 
-/// Drives the world to its end in slices of simulated time, showing progress on a
-/// terminal when the run is long.
-fn drive(world: &mut CoSim, recorder: &mut Recorder) -> Result<()> {
+/// Drives the world to its end — window by window under a controller, else in slices
+/// of 1024 steps with progress on a terminal — writing checkpoints on the way.
+fn drive(
+    out: &Path,
+    world: &mut CoSim,
+    recorder: &mut Recorder,
+    mut controller: Option<&mut Controller>,
+    options: RunOptions,
+) -> Result<()> {
     let s = world.scenario();
     let (steps, dt, end) = (s.steps, s.dt, s.duration);
     let mut progress = crate::progress::Progress::new(steps);
     let slice = SimTime(dt.0 * 1024);
-    let mut t = SimTime::ZERO;
+    let mut t = match &controller {
+        Some(c) => c.next_window(),
+        None => world.now(),
+    };
+    let every = options.checkpoint_every.filter(|e| e.0 > 0);
+    let mut next_cp = every.map(|e| SimTime((t.0 / e.0 + 1) * e.0));
     while t < end {
-        t = SimTime(t.0 + slice.0).min(end);
-        world.advance_to(t, recorder)?;
-        progress.tick(world.steps_done());
+        let target = next_cp.unwrap_or(end).min(end);
+        match controller.as_deref_mut() {
+            Some(c) => {
+                c.run_until(world, recorder, target)?;
+                t = c.next_window();
+            }
+            None => {
+                while t < target {
+                    t = SimTime(t.0 + slice.0).min(target);
+                    world.advance_to(t, recorder)?;
+                    progress.tick(world.steps_done());
+                }
+            }
+        }
+        if let (Some(e), Some(cp)) = (every, next_cp) {
+            if t < end {
+                crate::checkpoint::write(out, t, world, recorder, controller.as_deref())?;
+            }
+            next_cp = Some(SimTime((t.0 / e.0 + 1) * e.0).max(SimTime(cp.0 + e.0)));
+        }
     }
     world.run_to_end(recorder)?;
     progress.finish();
@@ -170,7 +241,7 @@ fn write_summary(
         "status": if error.is_some() { "diverged" } else { "ok" },
         "error": error,
         "digest": outcome.digest,
-        "digest_algorithm": "blake3 over every step's t [ns] and the bits of w, f, p, v (see trace::digest)",
+        "digest_algorithm": "BLAKE3 chain d_(k+1) = BLAKE3(d_k, record_k) over every step: t [ns] and the bits of w, f, p, v (see trace::digest)",
         "steps": outcome.steps,
         "sim_seconds": sim_seconds,
         "wall_seconds": outcome.wall_seconds,

@@ -10,7 +10,7 @@
 use crate::kernel::SimTime;
 
 /// One measurement window.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Epoch {
     /// Window start.
     pub t_start: SimTime,
@@ -21,7 +21,7 @@ pub struct Epoch {
 }
 
 /// Accumulates `∫ w²` per link; the owner closes a window at its end time.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct CostMeter {
     dt: SimTime,
     start: SimTime,

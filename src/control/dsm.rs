@@ -154,7 +154,7 @@ pub type DsmError = SimplexError;
 /// The set is convex (`k_i / x_i` is convex for `x_i > 0`), which the Nelder–Mead
 /// contractions rely on. Mapping the SPEC's CP (last delay eliminated through the budget)
 /// onto the controlled coordinates is the caller's business.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Feasible {
     lower: Vec<f64>,
     upper: Vec<f64>,
@@ -414,7 +414,7 @@ pub fn d_s_min(reflections: usize, speed: f64, period: f64) -> f64 {
 }
 
 /// Parameters of the DSM.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct DsmConfig {
     /// Edge length `D_s` of the simplex [units of x]; thesis 0.012 s. Should be at least
     /// [`d_s_min`] for the speed of the optimum.
@@ -424,7 +424,7 @@ pub struct DsmConfig {
 }
 
 /// A simplex with its stored costs.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 struct Simplex {
     x: Vec<Vec<f64>>,
     cost: Vec<f64>,
@@ -519,7 +519,7 @@ pub(crate) fn sanitize(cost: f64) -> f64 {
 }
 
 /// Where the DSM stands: what the next [`Dsm::ask`] is for. For traces.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum DsmPhase {
     /// Measuring vertex `vertex` (0-based) of the starting simplex of `of` vertices.
     Initial {
@@ -546,7 +546,7 @@ pub enum DsmPhase {
 
 /// Reflection `p` to prepare, with the working simplex, the best candidate so far and
 /// the vertex the previous reflection made.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 struct Pass {
     p: usize,
     work: Simplex,
@@ -554,7 +554,7 @@ struct Pass {
     last_created: Option<usize>,
 }
 
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 enum Stage {
     Initial {
         next: usize,
@@ -574,7 +574,7 @@ enum Stage {
 
 /// The Dynamic Simplex optimizer: an ask/tell state machine (see the module docs for the
 /// rules). `Clone` so that the simulator can fork and checkpoint it.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Dsm {
     config: DsmConfig,
     feasible: Feasible,

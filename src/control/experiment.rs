@@ -26,7 +26,7 @@ use crate::kernel::SimTime;
 use crate::scenario::model::{ControllerSpec, Measure, Method};
 
 /// A measured point of the delay space.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Candidate {
     /// Controlled delays [s].
     pub x: Vec<f64>,
@@ -35,7 +35,7 @@ pub struct Candidate {
 }
 
 /// One baseline's result in one window.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct BaselineResult {
     /// Method name (`grid`, `no_opt`, `dsm_tau1_plus`, …).
     pub name: String,
@@ -44,7 +44,7 @@ pub struct BaselineResult {
 }
 
 /// What happened in one window.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct WindowReport {
     /// Window start.
     pub t_start: SimTime,
@@ -61,7 +61,7 @@ pub struct WindowReport {
 }
 
 /// Everything a controlled run measured.
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct Experiment {
     /// One report per window, in time order.
     pub windows: Vec<WindowReport>,
@@ -131,160 +131,213 @@ fn controller_error(e: impl std::fmt::Display) -> Error {
 /// Runs a controlled scenario to its end, recording the live world with `obs`; fills
 /// `exp` as windows complete (so a diverged run keeps what it measured).
 pub fn run(world: &mut CoSim, obs: &mut dyn Observer, exp: &mut Experiment) -> Result<()> {
-    let scenario = world.scenario().clone();
-    let Some(spec) = scenario.controller.clone() else {
+    let Some(mut controller) = Controller::new(world.scenario())? else {
         return world.run_to_end(obs);
     };
-    let delays = Delays::new(&spec, &scenario.channels, scenario.dt);
-    let feasible = delays.feasible().map_err(controller_error)?;
-    let dsm_config = DsmConfig {
-        size: spec.dsm_size,
-        reflections: spec.reflections,
-    };
-    let mut dsm = match spec.method {
-        Method::Dsm => {
-            Some(Dsm::new(dsm_config, &spec.initial, feasible.clone()).map_err(controller_error)?)
-        }
-        _ => None,
-    };
-    let wants_nm =
-        spec.method == Method::NelderMead || spec.baselines.contains(&Method::NelderMead);
-    let mut nm = if wants_nm {
-        let config = NelderMeadConfig {
+    let end = world.scenario().duration;
+    let result = controller.run_until(world, obs, end);
+    *exp = controller.experiment.clone();
+    result?;
+    world.run_to_end(obs)
+}
+
+/// The controller's whole state between windows: the simplex searches and what was
+/// measured so far. Serializable, so a checkpoint can carry it.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct Controller {
+    dsm: Option<Dsm>,
+    nm: Option<NelderMead>,
+    next: SimTime,
+    /// Everything measured so far.
+    pub experiment: Experiment,
+}
+
+impl Controller {
+    /// The controller of `scenario` (`None` when it has none), before its first window.
+    pub fn new(scenario: &crate::scenario::Scenario) -> Result<Option<Controller>> {
+        let Some(spec) = scenario.controller.as_ref() else {
+            return Ok(None);
+        };
+        let delays = Delays::new(spec, &scenario.channels, scenario.dt);
+        let feasible = delays.feasible().map_err(controller_error)?;
+        let dsm_config = DsmConfig {
             size: spec.dsm_size,
-            x_tolerance: scenario.dt.as_secs_f64(),
-            f_tolerance: 0.0,
+            reflections: spec.reflections,
         };
-        Some(NelderMead::new(config, &spec.initial, feasible).map_err(controller_error)?)
-    } else {
-        None
-    };
-    let wants_grid = spec.method == Method::Grid || spec.baselines.contains(&Method::Grid);
-    let grid_points = if wants_grid || spec.surface_window.is_some() {
-        delays.grid(spec.grid_step)
-    } else {
-        Vec::new()
-    };
-    let no_opt = delays.equal(&spec.initial);
-    let names = channel_names(&scenario.channels);
-    let period = scenario.measurement_period;
-    let windows = scenario.duration.0.div_ceil(period.0);
-    let mut progress = crate::progress::Progress::with_unit(windows, "windows");
-    let mut t = SimTime::ZERO;
-    while t < scenario.duration {
-        let t_end = SimTime(t.0 + period.0).min(scenario.duration);
-        world.advance_to(t, obs)?;
-        let live_world: &CoSim = world;
-        let eval = |x: &[f64]| evaluate(live_world, &delays, x, t, t_end);
-        let surface_here = spec.surface_window == Some(t);
-        let grid: Option<Vec<Candidate>> = (wants_grid || surface_here).then(|| {
-            let objectives: Vec<f64> = grid_points.par_iter().map(|x| eval(x)).collect();
-            grid_points
-                .iter()
-                .zip(objectives)
-                .map(|(x, objective)| Candidate {
-                    x: x.clone(),
-                    objective,
-                })
-                .collect()
-        });
-        let grid_best = grid.as_deref().and_then(argmin);
-        let mut dsm_path = Vec::new();
-        let live_x = match spec.method {
-            Method::Dsm => {
-                let d = dsm.as_mut().expect("ok: built for the DSM method");
-                match spec.measure {
-                    Measure::Lookahead => {
-                        d.iterate(|x| {
-                            let objective = eval(x);
-                            dsm_path.push(Candidate {
-                                x: x.to_vec(),
-                                objective,
+        let dsm = match spec.method {
+            Method::Dsm => Some(
+                Dsm::new(dsm_config, &spec.initial, feasible.clone()).map_err(controller_error)?,
+            ),
+            _ => None,
+        };
+        let wants_nm =
+            spec.method == Method::NelderMead || spec.baselines.contains(&Method::NelderMead);
+        let nm = if wants_nm {
+            let config = NelderMeadConfig {
+                size: spec.dsm_size,
+                x_tolerance: scenario.dt.as_secs_f64(),
+                f_tolerance: 0.0,
+            };
+            Some(NelderMead::new(config, &spec.initial, feasible).map_err(controller_error)?)
+        } else {
+            None
+        };
+        Ok(Some(Controller {
+            dsm,
+            nm,
+            next: SimTime::ZERO,
+            experiment: Experiment::default(),
+        }))
+    }
+
+    /// Start of the next window to decide.
+    pub fn next_window(&self) -> SimTime {
+        self.next
+    }
+
+    /// Decides and runs every window that starts before `stop`.
+    pub fn run_until(
+        &mut self,
+        world: &mut CoSim,
+        obs: &mut dyn Observer,
+        stop: SimTime,
+    ) -> Result<()> {
+        let scenario = world.scenario().clone();
+        let Some(spec) = scenario.controller.clone() else {
+            return Ok(());
+        };
+        let delays = Delays::new(&spec, &scenario.channels, scenario.dt);
+        let wants_grid = spec.method == Method::Grid || spec.baselines.contains(&Method::Grid);
+        let grid_points = if wants_grid || spec.surface_window.is_some() {
+            delays.grid(spec.grid_step)
+        } else {
+            Vec::new()
+        };
+        let no_opt = delays.equal(&spec.initial);
+        let names = channel_names(&scenario.channels);
+        let period = scenario.measurement_period;
+        let windows = scenario.duration.0.div_ceil(period.0);
+        let mut progress = crate::progress::Progress::with_unit(windows, "windows");
+        let (dsm, nm, exp) = (&mut self.dsm, &mut self.nm, &mut self.experiment);
+        let mut t = self.next;
+        while t < scenario.duration && t < stop {
+            let t_end = SimTime(t.0 + period.0).min(scenario.duration);
+            world.advance_to(t, obs)?;
+            let live_world: &CoSim = world;
+            let eval = |x: &[f64]| evaluate(live_world, &delays, x, t, t_end);
+            let surface_here = spec.surface_window == Some(t);
+            let grid: Option<Vec<Candidate>> = (wants_grid || surface_here).then(|| {
+                let objectives: Vec<f64> = grid_points.par_iter().map(|x| eval(x)).collect();
+                grid_points
+                    .iter()
+                    .zip(objectives)
+                    .map(|(x, objective)| Candidate {
+                        x: x.clone(),
+                        objective,
+                    })
+                    .collect()
+            });
+            let grid_best = grid.as_deref().and_then(argmin);
+            let mut dsm_path = Vec::new();
+            let live_x = match spec.method {
+                Method::Dsm => {
+                    let d = dsm.as_mut().expect("ok: built for the DSM method");
+                    match spec.measure {
+                        Measure::Lookahead => {
+                            d.iterate(|x| {
+                                let objective = eval(x);
+                                dsm_path.push(Candidate {
+                                    x: x.to_vec(),
+                                    objective,
+                                });
+                                objective
                             });
-                            objective
-                        });
-                        d.best().to_vec()
+                            d.best().to_vec()
+                        }
+                        Measure::Online => d.ask().unwrap_or_else(|| d.best().to_vec()),
                     }
-                    Measure::Online => d.ask().unwrap_or_else(|| d.best().to_vec()),
                 }
-            }
-            Method::Grid => grid_best
-                .as_ref()
-                .map_or_else(|| spec.initial.clone(), |c| c.x.clone()),
-            Method::NoOptimization => no_opt.clone(),
-            Method::Fixed => spec.initial.clone(),
-            Method::NelderMead => {
-                let n = nm.as_mut().expect("ok: built for Nelder–Mead");
-                nelder_mead_window(n, spec.reflections + 1, &eval);
-                n.best().to_vec()
-            }
-        };
-        let mut baselines = Vec::new();
-        for &b in &spec.baselines {
-            let candidate = match b {
-                Method::Grid => grid_best.clone().unwrap_or(Candidate {
-                    x: Vec::new(),
-                    objective: f64::NAN,
-                }),
+                Method::Grid => grid_best
+                    .as_ref()
+                    .map_or_else(|| spec.initial.clone(), |c| c.x.clone()),
+                Method::NoOptimization => no_opt.clone(),
+                Method::Fixed => spec.initial.clone(),
                 Method::NelderMead => {
                     let n = nm.as_mut().expect("ok: built for Nelder–Mead");
                     nelder_mead_window(n, spec.reflections + 1, &eval);
-                    measured(n.best(), &eval)
+                    n.best().to_vec()
                 }
-                Method::NoOptimization => measured(&no_opt, &eval),
-                Method::Fixed => measured(&spec.initial, &eval),
-                Method::Dsm => measured(&live_x, &eval),
             };
-            baselines.push(BaselineResult {
-                name: b.name().to_string(),
-                candidate,
-            });
-        }
-        if let Some(delta) = spec.dsm_delta {
-            for i in 0..live_x.len() {
-                for (sign, word) in [(1.0, "plus"), (-1.0, "minus")] {
-                    let mut x = live_x.clone();
-                    x[i] += sign * delta;
-                    baselines.push(BaselineResult {
-                        name: format!("dsm_{}_{word}", names[i]),
-                        candidate: measured(&x, &eval),
-                    });
+            let mut baselines = Vec::new();
+            for &b in &spec.baselines {
+                let candidate = match b {
+                    Method::Grid => grid_best.clone().unwrap_or(Candidate {
+                        x: Vec::new(),
+                        objective: f64::NAN,
+                    }),
+                    Method::NelderMead => {
+                        let n = nm.as_mut().expect("ok: built for Nelder–Mead");
+                        nelder_mead_window(n, spec.reflections + 1, &eval);
+                        measured(n.best(), &eval)
+                    }
+                    Method::NoOptimization => measured(&no_opt, &eval),
+                    Method::Fixed => measured(&spec.initial, &eval),
+                    Method::Dsm => measured(&live_x, &eval),
+                };
+                baselines.push(BaselineResult {
+                    name: b.name().to_string(),
+                    candidate,
+                });
+            }
+            if let Some(delta) = spec.dsm_delta {
+                for i in 0..live_x.len() {
+                    for (sign, word) in [(1.0, "plus"), (-1.0, "minus")] {
+                        let mut x = live_x.clone();
+                        x[i] += sign * delta;
+                        baselines.push(BaselineResult {
+                            name: format!("dsm_{}_{word}", names[i]),
+                            candidate: measured(&x, &eval),
+                        });
+                    }
                 }
             }
+            if surface_here {
+                exp.surface = grid.clone().map(|g| (t, g));
+            }
+            let taus = delays
+                .taus(&live_x)
+                .expect("ok: every method picks feasible delays");
+            let achieved = delays.achieved(&taus);
+            world.set_taus(t, &taus, &achieved);
+            let run = world.advance_to(t_end, obs);
+            let objective = match (&run, world.epochs().last()) {
+                (Ok(()), Some(e)) if e.t_end == t_end => delays.objective(e.cost, &achieved),
+                _ => f64::INFINITY,
+            };
+            if let (Method::Dsm, Measure::Online, Some(d)) =
+                (spec.method, spec.measure, dsm.as_mut())
+            {
+                d.tell(objective);
+            }
+            exp.windows.push(WindowReport {
+                t_start: t,
+                t_end,
+                live: Candidate {
+                    x: live_x,
+                    objective,
+                },
+                baselines,
+                grid_best,
+                dsm_path,
+            });
+            run?;
+            progress.tick(exp.windows.len() as u64);
+            t = t_end;
+            self.next = t;
         }
-        if surface_here {
-            exp.surface = grid.clone().map(|g| (t, g));
-        }
-        let taus = delays
-            .taus(&live_x)
-            .expect("ok: every method picks feasible delays");
-        let achieved = delays.achieved(&taus);
-        world.set_taus(t, &taus, &achieved);
-        let run = world.advance_to(t_end, obs);
-        let objective = match (&run, world.epochs().last()) {
-            (Ok(()), Some(e)) if e.t_end == t_end => delays.objective(e.cost, &achieved),
-            _ => f64::INFINITY,
-        };
-        if let (Method::Dsm, Measure::Online, Some(d)) = (spec.method, spec.measure, dsm.as_mut()) {
-            d.tell(objective);
-        }
-        exp.windows.push(WindowReport {
-            t_start: t,
-            t_end,
-            live: Candidate {
-                x: live_x,
-                objective,
-            },
-            baselines,
-            grid_best,
-            dsm_path,
-        });
-        run?;
-        progress.tick(exp.windows.len() as u64);
-        t = t_end;
+        progress.finish();
+        Ok(())
     }
-    progress.finish();
-    world.run_to_end(obs)
 }
 
 /// Up to `budget` Nelder–Mead measurements in this window (none once it has converged).

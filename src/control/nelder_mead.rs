@@ -34,7 +34,7 @@ use std::cmp::Ordering;
 use super::dsm::{sanitize, Feasible, SimplexError};
 
 /// Parameters of the Nelder–Mead search.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct NelderMeadConfig {
     /// Edge length of the initial regular simplex around `x0` [units of x].
     pub size: f64,
@@ -46,7 +46,7 @@ pub struct NelderMeadConfig {
 }
 
 /// What the next [`NelderMead::ask`] is for. For traces.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum NelderMeadPhase {
     /// Measuring vertex `vertex` (0-based) of the initial simplex.
     Initial {
@@ -70,7 +70,7 @@ pub enum NelderMeadPhase {
     Converged,
 }
 
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 enum Stage {
     Initial {
         next: usize,
@@ -97,7 +97,7 @@ enum Stage {
 }
 
 /// Nelder–Mead as an ask/tell state machine. `Clone` for forks and checkpoints.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct NelderMead {
     config: NelderMeadConfig,
     feasible: Feasible,

@@ -3,7 +3,7 @@
 use crate::network::Message;
 
 /// What happens at an event.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Event {
     /// All nodes step from the event's time (class `PartitionStep`).
     Step,

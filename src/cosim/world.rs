@@ -46,7 +46,7 @@ impl Observer for () {
 }
 
 /// One closed measurement window with the network settings in force over it.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct EpochRecord {
     /// Window start.
     pub t_start: SimTime,
@@ -62,7 +62,7 @@ pub struct EpochRecord {
 
 /// The whole co-simulation. `Clone` is a fork: the clone continues independently and
 /// bit-identically to the original.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct CoSim {
     scenario: Arc<Scenario>,
     layout: Arc<Layout>,

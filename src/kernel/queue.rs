@@ -75,7 +75,7 @@ use super::SimTime;
 /// The discriminants are the order (see the [module docs](self) for the reasons):
 /// `Measurement (0) < Controller (1) < ClockSync (2) < Slot (3) < Sample (4) <
 /// Delivery (5) < PartitionStep (6)`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize)]
 #[repr(u8)]
 pub enum EventClass {
     /// Close the measurement window ending at this time (cost of the window).
@@ -131,7 +131,7 @@ impl fmt::Display for EventClass {
 /// The total-order key of a scheduled event: time, then class, then insertion order.
 ///
 /// The derived `Ord` compares the fields in declaration order.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize)]
 pub struct EventKey {
     /// When the event happens.
     pub time: SimTime,
@@ -301,6 +301,13 @@ impl<E> Kernel<E> {
         };
         // 2^64 inserts would take centuries at one per nanosecond.
         self.next_seq += 1;
+        self.insert(key, event);
+        Ok(key)
+    }
+
+    /// Puts `event` in the queue under `key` (no checks: callers guarantee the order).
+    #[inline]
+    fn insert(&mut self, key: EventKey, event: E) {
         let slot = match self.free.pop() {
             Some(slot) => {
                 self.slab[slot] = Some(event);
@@ -312,7 +319,6 @@ impl<E> Kernel<E> {
             }
         };
         self.queue.push(slot, Reverse(key));
-        Ok(key)
     }
 
     /// Schedules `event` at `now + delay`.
@@ -601,5 +607,55 @@ mod tests {
         let early = s.find("early").unwrap();
         let late = s.find("late").unwrap();
         assert!(early < late, "{s}");
+    }
+}
+
+/// The serialized form of a [`Kernel`]: its clock and its pending events in pop order.
+/// Slot indices are not part of it: pop order depends only on the keys, so a restored
+/// kernel pops exactly what the original would have.
+#[derive(serde::Serialize)]
+struct KernelImageRef<'a, E> {
+    now: SimTime,
+    now_class: EventClass,
+    next_seq: u64,
+    pending: Vec<(EventKey, &'a E)>,
+}
+
+#[derive(serde::Deserialize)]
+struct KernelImage<E> {
+    now: SimTime,
+    now_class: EventClass,
+    next_seq: u64,
+    pending: Vec<(EventKey, E)>,
+}
+
+impl<E: serde::Serialize> serde::Serialize for Kernel<E> {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        KernelImageRef {
+            now: self.now,
+            now_class: self.now_class,
+            next_seq: self.next_seq,
+            pending: self.pending().collect(),
+        }
+        .serialize(serializer)
+    }
+}
+
+impl<'de, E: serde::Deserialize<'de>> serde::Deserialize<'de> for Kernel<E> {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        let image = KernelImage::<E>::deserialize(deserializer)?;
+        let mut k = Kernel::with_capacity(image.pending.len());
+        k.now = image.now;
+        k.now_class = image.now_class;
+        k.next_seq = image.next_seq;
+        for (key, event) in image.pending {
+            if key.seq >= image.next_seq || (key.time, key.class) < (k.now, k.now_class) {
+                return Err(serde::de::Error::custom(format!(
+                    "pending event {key:?} is inconsistent with the kernel clock"
+                )));
+            }
+            k.insert(key, event);
+        }
+        Ok(k)
     }
 }

@@ -21,7 +21,7 @@ use nalgebra_sparse::CscMatrix;
 use crate::scenario::model::Solver;
 
 /// Per-link Jacobian data: `J_k = [nᵀ, c_aᵀ]` on body `a`, `[−nᵀ, −c_bᵀ]` on body `b`.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Geometry {
     /// `(a, b)` body indices per link.
     pub ends: Vec<(usize, usize)>,
@@ -34,7 +34,7 @@ pub struct Geometry {
 }
 
 /// Inverse mass data per body.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct MassData {
     /// 1/m [1/kg]; 0 makes a body immovable.
     pub inv_mass: Vec<f64>,
@@ -51,7 +51,7 @@ pub enum SolveError {
 }
 
 /// One contribution to an entry of `A` through a shared body.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, serde::Serialize, serde::Deserialize)]
 struct Entry {
     body: usize,
     k: usize,
@@ -63,18 +63,21 @@ struct Entry {
     value: usize,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 enum Side {
     A,
     B,
 }
 
 /// Exact sparse Cholesky state.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 struct Exact {
     pattern: SparsityPattern,
     entries: Vec<Entry>,
     values: Vec<f64>,
+    /// The numeric factorization; rebuilt from the pattern after a checkpoint restore
+    /// (the same elimination, so the same bits).
+    #[serde(skip)]
     factor: Option<CscCholesky<f64>>,
     rhs: DVector<f64>,
     /// Dense row-major `m × m` storage, used instead of the sparse factorization for
@@ -87,7 +90,7 @@ struct Exact {
 pub const DENSE_MAX_LINKS: usize = 32;
 
 /// CG scratch.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 struct Cg {
     max_iterations: usize,
     tolerance: f64,
@@ -99,7 +102,7 @@ struct Cg {
 }
 
 /// The `J M⁻¹ Jᵀ` solver of a run, with its scratch memory.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct JsSolver {
     exact: Option<Exact>,
     cg: Option<Cg>,

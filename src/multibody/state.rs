@@ -9,7 +9,7 @@ use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use crate::scenario::model::{BodyModel, Scenario};
 
 /// Positions, orientations, velocities of every body and the link multipliers.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct State {
     /// Centre-of-mass positions [m].
     pub p: Vec<Vector3<f64>>,
@@ -25,7 +25,7 @@ pub struct State {
 }
 
 /// Time derivative of a [`State`] (same layout).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Rates {
     /// ṗ = v [m/s].
     pub p: Vec<Vector3<f64>>,

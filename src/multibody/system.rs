@@ -8,7 +8,7 @@ use crate::kernel::SimTime;
 use crate::scenario::model::{BodyModel, ForceSpec, Integrator, Scenario, Stabilizer};
 
 /// One distance link, with body indices resolved.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Link {
     /// Index of body `a`.
     pub a: usize,
@@ -24,7 +24,7 @@ pub struct Link {
 
 /// A multi-body system ready to integrate: model data, stabilizer, integrator and all
 /// scratch memory (no allocation happens inside a step).
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct System {
     pub(crate) rigid: bool,
     pub(crate) inertia: Vec<Vector3<f64>>,
@@ -47,7 +47,7 @@ pub struct System {
 }
 
 /// Per-evaluation scratch: body accumulators and per-link kinematics.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub(crate) struct Workspace {
     /// Net force per body [N].
     pub force: Vec<Vector3<f64>>,

@@ -7,7 +7,7 @@ use crate::partition::layout::Route;
 use crate::scenario::model::ChannelSpec;
 
 /// A channel's configuration and the routes it carries.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Channel {
     /// The scenario's description.
     pub spec: ChannelSpec,

@@ -6,7 +6,7 @@ use crate::kernel::SimTime;
 use crate::scenario::model::DataKind;
 
 /// The data a message carries.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Payload {
     /// A body's state for the nodes that ghost it, with the owner-side load on it (the
     /// external force and every link force the receiver does not compute itself).
@@ -60,7 +60,7 @@ impl Payload {
 }
 
 /// A message in flight.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Message {
     /// Sending node (0-based).
     pub from: usize,

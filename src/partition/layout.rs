@@ -3,7 +3,7 @@
 use crate::scenario::model::{DataKind, Scenario};
 
 /// A message route: a kind of data about one body (or link) from one node to another.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
 pub struct Route {
     /// What is sent.
     pub kind: DataKind,
@@ -18,7 +18,7 @@ pub struct Route {
 }
 
 /// Who owns what, and what flows where.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Layout {
     /// Number of computing nodes.
     pub nodes: usize,

@@ -12,7 +12,7 @@ use crate::network::Payload;
 use crate::scenario::model::{GhostMode, Scenario};
 
 /// A border force received from another node, held until the next arrival.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 struct HeldForce {
     /// Global link index.
     link: usize,
@@ -25,7 +25,7 @@ struct HeldForce {
 }
 
 /// A ghost's last received state (for the `hold` mode).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 struct HeldState {
     p: Vector3<f64>,
     v: Vector3<f64>,
@@ -34,7 +34,7 @@ struct HeldState {
 }
 
 /// A computing node.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Node {
     /// Node index (0-based; printed as `index + 1`).
     pub index: usize,

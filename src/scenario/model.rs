@@ -9,7 +9,7 @@ use nalgebra::{UnitQuaternion, Vector3};
 use crate::kernel::SimTime;
 
 /// Time integrator of the `(x, v, z)` state.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Integrator {
     /// Explicit (forward) Euler over the whole state: every rate at the start of the step
     /// (the thesis's integrator).
@@ -33,7 +33,7 @@ impl Integrator {
 }
 
 /// Constraint stabilization method (SPEC section 2).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Stabilizer {
     /// Sliding-mode control with multipliers `z` in the ODE state.
     Smc {
@@ -55,7 +55,7 @@ pub enum Stabilizer {
 }
 
 /// How the linear system in the multipliers is solved.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Solver {
     /// Exact sparse Cholesky factorization (symbolic pattern computed once per run).
     Cholesky,
@@ -69,7 +69,7 @@ pub enum Solver {
 }
 
 /// Which body model the integrator uses.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum BodyModel {
     /// Point masses: no orientation or angular velocity in the state. Only valid when
     /// every link anchor is at a body centre and no body starts spinning.
@@ -89,7 +89,7 @@ impl BodyModel {
 }
 
 /// One body, with its initial state.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct BodySpec {
     /// The id used in the scenario file and in trace column names (`px_B<id>`).
     pub id: u32,
@@ -111,7 +111,7 @@ pub struct BodySpec {
 }
 
 /// One rigid distance link.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct LinkSpec {
     /// Index (into [`Scenario::bodies`]) of body `a`.
     pub a: usize,
@@ -127,7 +127,7 @@ pub struct LinkSpec {
 
 /// A sinusoidal external force at a body's centre:
 /// `amplitude · sin(omega · t + phase)` for `from ≤ t < until` (absolute time t).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ForceSpec {
     /// Index of the driven body.
     pub body: usize,
@@ -146,7 +146,7 @@ pub struct ForceSpec {
 }
 
 /// A linear amplitude envelope: scale `a0` until `t0`, `a1` from `t1`, linear between.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Ramp {
     /// Start of the ramp.
     pub t0: SimTime,
@@ -186,7 +186,7 @@ impl ForceSpec {
 }
 
 /// What a run writes besides summary.json.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct OutputSpec {
     /// Keep every `decimation`-th step in trace.csv (the first and last steps are always
     /// kept). The digest covers every step regardless.
@@ -198,7 +198,7 @@ pub struct OutputSpec {
 }
 
 /// How a partition treats the far-end bodies of the border links it owns (SPEC section 3).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum GhostMode {
     /// The node integrates its ghosts like its own bodies, driven by its own links and
     /// the owner-side force carried in the state message; every arriving state
@@ -209,7 +209,7 @@ pub enum GhostMode {
 }
 
 /// What a message carries (the `time` distribution routes by this).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
 pub enum DataKind {
     /// A body's state `(x, ẋ)` (plus the owner-side force), owner → ghosting node.
     State,
@@ -229,7 +229,7 @@ impl DataKind {
 
 /// The split of the model over computing nodes. Node indices are 0-based here; files,
 /// traces and messages name node `i` as `i + 1` (node 0 is the TDMA server).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PartitionSpec {
     /// Number of computing nodes.
     pub nodes: usize,
@@ -244,7 +244,7 @@ pub struct PartitionSpec {
 }
 
 /// A periodic communication channel (SPEC section 4).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ChannelSpec {
     /// Name used in epochs.csv columns (`tau_<name>_requested`).
     pub name: String,
@@ -277,14 +277,14 @@ impl ChannelSpec {
 }
 
 /// The network model carrying the channels.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum NetworkSpec {
     /// Ideal channels: sample every τ, deliver after the latency, nothing lost.
     Ideal,
 }
 
 /// The delay-optimization problem (SPEC section 5).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Problem {
     /// CP: minimize C subject to `Σ k_i/τ_i ≤ budget`; the controller sets the first
     /// n − 1 channels and the last takes the remaining budget.
@@ -300,7 +300,7 @@ pub enum Problem {
 }
 
 /// How the controller picks the delays the live plant runs at.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
 pub enum Method {
     /// The Dynamic Simplex Method (SPEC section 5).
     Dsm,
@@ -329,7 +329,7 @@ impl Method {
 }
 
 /// How a candidate's cost is measured.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Measure {
     /// Fork the whole co-simulation at the window start and run the window under the
     /// candidate (the thesis's server-side simulation); the live plant then runs the
@@ -340,7 +340,7 @@ pub enum Measure {
 }
 
 /// The controller (SPEC section 5). Its period T is the measurement period.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ControllerSpec {
     /// Method driving the live plant.
     pub method: Method,
@@ -369,7 +369,7 @@ pub struct ControllerSpec {
 }
 
 /// A validated scenario.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Scenario {
     /// Scenario name (copied into summary.json).
     pub name: String,

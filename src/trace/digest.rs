@@ -1,16 +1,23 @@
-//! The run digest: BLAKE3 over the exact bytes of every recorded value.
+//! The run digest: BLAKE3 over the exact bytes of every recorded value, chained step by
+//! step.
 //!
-//! Order (SPEC section 6): for every step k = 0..=steps, in step order, the time `t_k`
-//! as a little-endian `u64` count of nanoseconds, then the `f64` bit patterns
-//! (little-endian) of every link's `w` then every link's `f` (link order), then every
-//! body's `p` then `v` (body order, x y z). Every step is hashed, whatever the trace
-//! decimation or the traced-body selection, so changing the output options never
-//! changes the digest; `-0.0` and `0.0` hash differently, as they are different bits.
+//! For every step k = 0..=steps, in step order, the step's record is the time `t_k` as a
+//! little-endian `u64` count of nanoseconds, then the `f64` bit patterns (little-endian)
+//! of every link's `w` then every link's `f` (link order), then every body's `p` then
+//! `v` (body order, x y z). The digest is the chain `d_{k+1} = BLAKE3(d_k ‖ record_k)`
+//! from `d_0` = 32 zero bytes, printed as 64 hex digits. Chaining keeps the whole state
+//! of the digest in 32 bytes, so a checkpoint can store it and a resumed run continues
+//! the very same chain.
+//!
+//! Every step is hashed, whatever the trace decimation or the traced-body selection, so
+//! changing the output options never changes the digest; `-0.0` and `0.0` hash
+//! differently, as they are different bits.
 
 /// Incremental digest of a run.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Digest {
-    hasher: blake3::Hasher,
+    chain: [u8; 32],
+    record: Vec<u8>,
 }
 
 impl Digest {
@@ -19,26 +26,44 @@ impl Digest {
         Digest::default()
     }
 
-    /// Adds a time in nanoseconds.
+    /// Adds a time in nanoseconds to the current record.
     pub fn time(&mut self, ns: u64) {
-        self.hasher.update(&ns.to_le_bytes());
+        self.record.extend_from_slice(&ns.to_le_bytes());
     }
 
-    /// Adds the bit patterns of `values`.
+    /// Adds the bit patterns of `values` to the current record.
     pub fn values(&mut self, values: &[f64]) {
         for v in values {
-            self.hasher.update(&v.to_bits().to_le_bytes());
+            self.record.extend_from_slice(&v.to_bits().to_le_bytes());
         }
     }
 
-    /// Adds the bit patterns of one value.
+    /// Adds the bit patterns of one value to the current record.
     pub fn value(&mut self, v: f64) {
-        self.hasher.update(&v.to_bits().to_le_bytes());
+        self.record.extend_from_slice(&v.to_bits().to_le_bytes());
     }
 
-    /// The digest as 64 lowercase hex digits.
+    /// Closes the current record: folds it into the chain.
+    pub fn end_step(&mut self) {
+        self.chain = self.folded();
+        self.record.clear();
+    }
+
+    fn folded(&self) -> [u8; 32] {
+        let mut h = blake3::Hasher::new();
+        h.update(&self.chain);
+        h.update(&self.record);
+        *h.finalize().as_bytes()
+    }
+
+    /// The digest as 64 lowercase hex digits (an open record counts as closed).
     pub fn hex(&self) -> String {
-        self.hasher.finalize().to_hex().to_string()
+        let bytes = if self.record.is_empty() {
+            self.chain
+        } else {
+            self.folded()
+        };
+        bytes.iter().map(|b| format!("{b:02x}")).collect()
     }
 }
 
@@ -46,16 +71,35 @@ impl Digest {
 mod tests {
     use super::*;
 
+    fn h(steps: &[&[f64]]) -> String {
+        let mut d = Digest::new();
+        for s in steps {
+            d.values(s);
+            d.end_step();
+        }
+        d.hex()
+    }
+
     #[test]
-    fn distinguishes_bit_patterns_and_order() {
-        let h = |vals: &[f64]| {
-            let mut d = Digest::new();
-            d.values(vals);
-            d.hex()
-        };
-        assert_ne!(h(&[0.0]), h(&[-0.0]));
-        assert_ne!(h(&[1.0, 2.0]), h(&[2.0, 1.0]));
-        assert_eq!(h(&[1.0, 2.0]), h(&[1.0, 2.0]));
+    fn distinguishes_bit_patterns_order_and_step_boundaries() {
+        assert_ne!(h(&[&[0.0]]), h(&[&[-0.0]]));
+        assert_ne!(h(&[&[1.0, 2.0]]), h(&[&[2.0, 1.0]]));
+        assert_eq!(h(&[&[1.0, 2.0]]), h(&[&[1.0, 2.0]]));
+        assert_ne!(h(&[&[1.0, 2.0]]), h(&[&[1.0], &[2.0]]));
         assert_eq!(h(&[]).len(), 64);
+    }
+
+    #[test]
+    fn a_restored_digest_continues_the_same_chain() {
+        let mut a = Digest::new();
+        a.values(&[1.0, 2.0]);
+        a.end_step();
+        let json = serde_json::to_string(&a).unwrap();
+        let mut b: Digest = serde_json::from_str(&json).unwrap();
+        for d in [&mut a, &mut b] {
+            d.values(&[3.0]);
+            d.end_step();
+        }
+        assert_eq!(a.hex(), b.hex());
     }
 }

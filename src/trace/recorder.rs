@@ -13,14 +13,20 @@ use super::Digest;
 /// plot the envelope `max_l |w_l|` only.
 pub const MAX_PLOTTED_LINKS: usize = 24;
 
-/// Records a run's steps.
+/// Records a run's steps. Serializable (without its open file) so that a checkpoint
+/// carries the digest chain, the plot series and, when kept, the trace text so far.
+#[derive(serde::Serialize, serde::Deserialize)]
 pub struct Recorder {
     decimation: u64,
     link_count: usize,
     trace_bodies: Vec<usize>,
     plot_bodies: Vec<(usize, u32)>,
+    #[serde(skip)]
     file: Option<AtomicFile>,
+    #[serde(skip)]
     line: String,
+    /// Every trace line written so far, kept when checkpoints are written.
+    kept: Option<String>,
     digest: Digest,
     max_violation: f64,
     rows: u64,
@@ -48,6 +54,7 @@ impl Recorder {
             plot_bodies: plot_bodies.iter().map(|&i| (i, body_ids[i])).collect(),
             file,
             line: String::new(),
+            kept: None,
             digest: Digest::new(),
             max_violation: 0.0,
             rows: 0,
@@ -74,6 +81,7 @@ impl Recorder {
                 }
             }
             writeln!(f, "{head}")?;
+            r.line = format!("{head}\n");
         }
         Ok(r)
     }
@@ -89,6 +97,7 @@ impl Recorder {
         for v in s.v {
             self.digest.values(v.as_slice());
         }
+        self.digest.end_step();
         for &w in s.w {
             self.max_violation = self.max_violation.max(w.abs());
         }
@@ -124,6 +133,9 @@ impl Recorder {
             }
         }
         self.line.push('\n');
+        if let Some(kept) = &mut self.kept {
+            kept.push_str(&self.line);
+        }
         file.write_all(self.line.as_bytes())
     }
 
@@ -140,6 +152,23 @@ impl Recorder {
     /// Rows written to the trace.
     pub fn rows(&self) -> u64 {
         self.rows
+    }
+
+    /// Keeps a copy of every trace line from now on (the header included), for
+    /// checkpoints.
+    pub fn keep_lines(&mut self) {
+        if self.kept.is_none() {
+            self.kept = Some(std::mem::take(&mut self.line));
+        }
+    }
+
+    /// Attaches a new trace file to a restored recorder and writes the kept lines to it.
+    pub fn reattach(&mut self, mut file: AtomicFile) -> std::io::Result<()> {
+        if let Some(kept) = &self.kept {
+            file.write_all(kept.as_bytes())?;
+        }
+        self.file = Some(file);
+        Ok(())
     }
 
     /// Closes the trace file (renaming it into place).

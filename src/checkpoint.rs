@@ -1,0 +1,122 @@
+//! Checkpoints: the complete state of a run at a window or slice boundary, written
+//! atomically as a versioned binary file, from which `dsmcosim resume` finishes the run
+//! with the same digest as an uninterrupted one.
+//!
+//! A checkpoint holds the whole world (kernel queue with every pending event and message
+//! in flight, every node's state, ghosts, held values and solver warm starts, channels,
+//! measurement windows — the scenario included), the recorder (digest chain, plot series,
+//! the trace lines so far) and the controller (simplex searches, everything measured).
+//!
+//! Layout: the 16-byte magic `DSMCOSIM-CKPT\0\0\0`, the layout version as a
+//! little-endian `u32`, then the state in `postcard` encoding, which stores every `f64`
+//! as its exact bits (infinities and NaN included, which JSON cannot hold). Random
+//! streams will be part of the world when a scene has any.
+
+use std::path::{Path, PathBuf};
+
+use crate::control::experiment::Controller;
+use crate::cosim::CoSim;
+use crate::error::{Error, Result};
+use crate::kernel::SimTime;
+use crate::output::{create_dir_all, write_atomic};
+use crate::trace::Recorder;
+
+/// The first bytes of every checkpoint file.
+pub const MAGIC: &[u8; 16] = b"DSMCOSIM-CKPT\0\0\0";
+/// The checkpoint layout version this binary reads and writes; bumped whenever any
+/// serialized type changes.
+pub const VERSION: u32 = 1;
+
+/// A run's complete state.
+#[derive(serde::Serialize, serde::Deserialize)]
+pub struct Checkpoint {
+    /// The `dsmcosim` version that wrote it (informative).
+    pub writer: String,
+    /// Simulated time of the checkpoint.
+    pub time: SimTime,
+    /// The world.
+    pub world: CoSim,
+    /// The recorder.
+    pub recorder: Recorder,
+    /// The controller, for controlled runs.
+    pub controller: Option<Controller>,
+}
+
+#[derive(serde::Serialize)]
+struct CheckpointRef<'a> {
+    writer: String,
+    time: SimTime,
+    world: &'a CoSim,
+    recorder: &'a Recorder,
+    controller: Option<&'a Controller>,
+}
+
+/// File name of the checkpoint at `t`: `t_<seconds, 6 digits>.<nanoseconds, 9>.ckpt`.
+pub fn file_name(t: SimTime) -> String {
+    format!(
+        "t_{:06}.{:09}.ckpt",
+        t.0 / crate::kernel::time::NANOS_PER_SEC,
+        t.0 % crate::kernel::time::NANOS_PER_SEC
+    )
+}
+
+/// Writes the checkpoint at `time` into `out/checkpoints/` and returns its path.
+pub fn write(
+    out: &Path,
+    time: SimTime,
+    world: &CoSim,
+    recorder: &Recorder,
+    controller: Option<&Controller>,
+) -> Result<PathBuf> {
+    let dir = out.join("checkpoints");
+    create_dir_all(&dir)?;
+    let path = dir.join(file_name(time));
+    let mut bytes = MAGIC.to_vec();
+    bytes.extend_from_slice(&VERSION.to_le_bytes());
+    let body = postcard::to_stdvec(&CheckpointRef {
+        writer: env!("CARGO_PKG_VERSION").to_string(),
+        time,
+        world,
+        recorder,
+        controller,
+    })
+    .map_err(|e| Error::io(&path, std::io::Error::other(e)))?;
+    bytes.extend_from_slice(&body);
+    write_atomic(&path, &bytes)?;
+    Ok(path)
+}
+
+/// Reads a checkpoint; a truncated, corrupted or foreign file is a clear error.
+pub fn read(path: &Path) -> Result<Checkpoint> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let label = path.display().to_string();
+    if bytes.len() < MAGIC.len() + 4 || &bytes[..MAGIC.len()] != MAGIC {
+        return Err(Error::invalid(label, "not a dsmcosim checkpoint (bad magic bytes)"));
+    }
+    let version = u32::from_le_bytes(
+        bytes[MAGIC.len()..MAGIC.len() + 4]
+            .try_into()
+            .expect("ok: four bytes"),
+    );
+    if version != VERSION {
+        return Err(Error::invalid(
+            label,
+            format!(
+                "checkpoint version {version} cannot be read by this binary (it reads version {VERSION})"
+            ),
+        ));
+    }
+    let (cp, rest): (Checkpoint, &[u8]) =
+        postcard::take_from_bytes(&bytes[MAGIC.len() + 4..]).map_err(|e| corrupt(&label, &e))?;
+    if !rest.is_empty() {
+        return Err(Error::invalid(
+            label,
+            format!("corrupted checkpoint: {} unexpected bytes after the state", rest.len()),
+        ));
+    }
+    Ok(cp)
+}
+
+fn corrupt(label: &str, e: &postcard::Error) -> Error {
+    Error::invalid(label, format!("corrupted or truncated checkpoint: {e}"))
+}

@@ -1,0 +1,165 @@
+//! Checkpoint/resume: a run resumed from any of its checkpoints ends with the same
+//! digest and the same output files as the uninterrupted run; a bad checkpoint is a
+//! clear error.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use dsmcosim::kernel::SimTime;
+use dsmcosim::run::{resume, run_with, RunOptions};
+use dsmcosim::scenario::parse_str;
+use serde_json::{json, Value};
+
+fn scratch(name: &str) -> PathBuf {
+    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("target")
+        .join("test-scratch")
+        .join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("scratch");
+    d
+}
+
+fn shipped(name: &str) -> Value {
+    let p = format!("{}/scenarios/{name}.json", env!("CARGO_MANIFEST_DIR"));
+    serde_json::from_str(&std::fs::read_to_string(p).expect("scenario")).expect("json")
+}
+
+fn read(p: &Path) -> Vec<u8> {
+    std::fs::read(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+/// Runs `v` with checkpoints every `every` s, resumes from each checkpoint, and checks
+/// digest, trace.csv and epochs.csv against the uninterrupted run.
+fn check_resume(name: &str, v: &Value, every: f64, expected_checkpoints: usize) {
+    let dir = scratch(name);
+    let s = parse_str(&v.to_string(), name).expect("scenario");
+    let opts = RunOptions {
+        checkpoint_every: SimTime::from_secs_f64(every),
+    };
+    let full = run_with(&s, &dir.join("full"), opts);
+    let plain = run_with(&s, &dir.join("plain"), RunOptions::default());
+    // Checkpointing itself changes nothing.
+    let digest = |r: &dsmcosim::Result<dsmcosim::run::Outcome>, d: &Path| match r {
+        Ok(o) => o.digest.clone(),
+        Err(_) => {
+            let s: Value = serde_json::from_slice(&read(&d.join("summary.json"))).unwrap();
+            s["digest"].as_str().unwrap().to_string()
+        }
+    };
+    let want = digest(&full, &dir.join("full"));
+    assert_eq!(
+        want,
+        digest(&plain, &dir.join("plain")),
+        "{name}: checkpointing changed the run"
+    );
+    let mut cps: Vec<PathBuf> = std::fs::read_dir(dir.join("full/checkpoints"))
+        .expect("checkpoints")
+        .map(|e| e.unwrap().path())
+        .collect();
+    cps.sort();
+    assert_eq!(cps.len(), expected_checkpoints, "{name}: {cps:?}");
+    for (i, cp) in cps.iter().enumerate() {
+        let out = dir.join(format!("resumed{i}"));
+        let r = resume(cp, &out, RunOptions::default());
+        assert_eq!(
+            digest(&r, &out),
+            want,
+            "{name}: resumed from {}",
+            cp.display()
+        );
+        for f in ["trace.csv", "epochs.csv"] {
+            assert!(
+                read(&out.join(f)) == read(&dir.join("full").join(f)),
+                "{name}: {f} differs after resuming from {}",
+                cp.display()
+            );
+        }
+    }
+}
+
+#[test]
+fn monolithic_run_resumes_bit_for_bit() {
+    let mut v = shipped("grid16_monolithic");
+    v["duration"] = json!(5.0);
+    check_resume("mono", &v, 1.7, 2);
+}
+
+#[test]
+fn sparse_solver_run_resumes_bit_for_bit() {
+    // 8×8 grid: 112 links, above the dense limit, so the sparse factorization is
+    // rebuilt after the restore.
+    let v = json!({
+        "name": "grid64", "seed": 1, "duration": 1.0, "dt": 0.001,
+        "model": {"grid": {"rows": 8, "cols": 8, "spacing": 1.8, "mass": 1.0, "size": 0.2}},
+        "forces": [{"body": 1, "amplitude": [0, 0, 20], "omega": 2.0}],
+        "output": {"decimation": 50}
+    });
+    check_resume("sparse", &v, 0.4, 2);
+}
+
+#[test]
+fn partitioned_fixed_delay_run_resumes_with_messages_in_flight() {
+    let mut v = shipped("grid16_space_fixed");
+    v["duration"] = json!(4.0);
+    // 0.5035 s: mid-period for the 5 ms channels, messages in flight.
+    check_resume("fixed", &v, 0.5035, 7);
+}
+
+#[test]
+fn controlled_dsm_run_resumes_with_its_simplex() {
+    let mut v = shipped("grid16_space_cp_ds2");
+    v["duration"] = json!(5.0);
+    v["controller"]["surface_window"] = json!(2.0);
+    // Checkpoints at the first window boundary at or after 1.5 s and 3 s: 2 s and 3 s.
+    check_resume("dsm", &v, 1.5, 2);
+}
+
+#[test]
+fn bad_checkpoints_are_clear_errors() {
+    let dir = scratch("bad_checkpoint");
+    let mut v = shipped("grid16_monolithic");
+    v["duration"] = json!(1.0);
+    let s = parse_str(&v.to_string(), "t").unwrap();
+    run_with(
+        &s,
+        &dir.join("full"),
+        RunOptions {
+            checkpoint_every: SimTime::from_secs_f64(0.5),
+        },
+    )
+    .unwrap();
+    let cp = dir.join("full/checkpoints/t_000000.500000000.ckpt");
+    let bytes = std::fs::read(&cp).unwrap();
+    let mut foreign = bytes.clone();
+    foreign[16..20].copy_from_slice(&99u32.to_le_bytes());
+    let cases: [(&str, Vec<u8>, &str); 3] = [
+        (
+            "truncated",
+            bytes[..bytes.len() / 2].to_vec(),
+            "corrupted or truncated",
+        ),
+        ("foreign", foreign, "version 99"),
+        (
+            "other",
+            b"{\"hello\": 1}".to_vec(),
+            "not a dsmcosim checkpoint",
+        ),
+    ];
+    for (name, body, want) in cases {
+        let p = dir.join(format!("{name}.ckpt"));
+        std::fs::write(&p, body).unwrap();
+        let o = Command::new(env!("CARGO_BIN_EXE_dsmcosim"))
+            .args(["resume", p.to_str().unwrap(), "--out"])
+            .arg(dir.join(format!("out_{name}")))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{name}: {err}");
+        assert!(err.contains(want), "{name}: {err:?} must say {want:?}");
+        assert!(
+            !dir.join(format!("out_{name}")).exists(),
+            "{name}: nothing written"
+        );
+    }
+}
