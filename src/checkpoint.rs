@@ -91,7 +91,10 @@ pub fn read(path: &Path) -> Result<Checkpoint> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     let label = path.display().to_string();
     if bytes.len() < MAGIC.len() + 4 || &bytes[..MAGIC.len()] != MAGIC {
-        return Err(Error::invalid(label, "not a dsmcosim checkpoint (bad magic bytes)"));
+        return Err(Error::invalid(
+            label,
+            "not a dsmcosim checkpoint (bad magic bytes)",
+        ));
     }
     let version = u32::from_le_bytes(
         bytes[MAGIC.len()..MAGIC.len() + 4]
@@ -111,7 +114,10 @@ pub fn read(path: &Path) -> Result<Checkpoint> {
     if !rest.is_empty() {
         return Err(Error::invalid(
             label,
-            format!("corrupted checkpoint: {} unexpected bytes after the state", rest.len()),
+            format!(
+                "corrupted checkpoint: {} unexpected bytes after the state",
+                rest.len()
+            ),
         ));
     }
     Ok(cp)

@@ -99,13 +99,7 @@ fn finish(
     options: RunOptions,
 ) -> Result<Outcome> {
     let started = Instant::now();
-    let result = drive(
-        out,
-        &mut world,
-        &mut recorder,
-        controller.as_mut(),
-        options,
-    );
+    let result = drive(out, &mut world, &mut recorder, controller.as_mut(), options);
     let wall_seconds = started.elapsed().as_secs_f64();
     recorder.commit()?;
     let experiment = controller.map(|c| c.experiment).unwrap_or_default();

@@ -311,11 +311,13 @@ pub fn study(json: &Value, scenario: &Scenario, options: Options) -> Result<Stud
     let reference = measure::measure(&reference_scenario, compare_every, &mut progress);
     let half = measure::measure(&half_scenario, compare_every, &mut progress);
     for (r, what) in [(&reference, "reference"), (&half, "reference at dt_ref/2")] {
-        if let Status::Diverged(e) = &r.status {
-            return Err(Error::invalid(
-                "reference",
-                format!("the {what} (monolithic RK4) failed: {e}"),
-            ));
+        if let (Status::Diverged(e), Some(time)) = (&r.status, r.failed_at) {
+            return Err(Error::Numerical {
+                time,
+                message: format!(
+                    "the {what} run (monolithic RK4) failed, nothing to compare against: {e}"
+                ),
+            });
         }
     }
     let reference_error = measure::position_errors(&half, &reference).0;
@@ -407,6 +409,62 @@ pub fn pareto_front(points: &[(f64, f64)]) -> Vec<bool> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use serde_json::json;
+
+    #[test]
+    fn study_records_every_knob_and_diverged_variants_as_rows() {
+        // μ = 1.5 ms: explicit Euler holds for dt < 2μ = 3 ms, so the 4 and 8 ms
+        // variants of the sweep must diverge — and be rows, not a failed study.
+        let v = json!({
+            "name": "db", "seed": 1, "duration": 0.4, "dt": 0.001,
+            "stabilizer": {"kind": "smc", "mu": 0.0015},
+            "model": {
+                "bodies": [
+                    {"id": 1, "mass": 1.0, "size": 0.2, "position": [0.9, 0, 0], "velocity": [0, 3, 0]},
+                    {"id": 2, "mass": 1.0, "size": 0.2, "position": [-0.9, 0, 0], "velocity": [0, -3, 0]}
+                ],
+                "links": [{"a": 1, "b": 2}]
+            },
+            "forces": [{"body": 1, "amplitude": [0, 0, 1], "omega": 3.0}]
+        });
+        let s = parse_str(&v.to_string(), "test").unwrap();
+        let study = study(&v, &s, Options { duration: None }).unwrap();
+        assert!(study.reference_error < 1e-9, "{}", study.reference_error);
+        let row = |knob: &str, setting: &str| {
+            let r = study
+                .rows
+                .iter()
+                .find(|r| r.knob == knob && r.setting == setting)
+                .unwrap_or_else(|| panic!("no row {knob} {setting}"));
+            &study.variants[r.variant]
+        };
+        for dt in ["4 ms", "8 ms"] {
+            let v = row("dt", dt);
+            assert!(
+                matches!(v.measured.status, Status::Diverged(_)),
+                "dt {dt}: {:?}",
+                v.measured.status
+            );
+            assert!(v.max_position_error.is_nan() && !v.pareto);
+        }
+        let (euler, rk4) = (row("integrator", "euler"), row("integrator", "rk4"));
+        assert_eq!(euler.measured.status, Status::Ok);
+        assert!(rk4.max_position_error < euler.max_position_error / 100.0);
+        assert!(study
+            .rows
+            .iter()
+            .any(|r| r.is_base && r.knob == "dt" && r.setting == "1 ms"));
+        assert!(study.notes.iter().any(|n| n.contains("ghosts")));
+        let dir = std::env::temp_dir().join(format!("dsmcosim-tradeoff-{}", std::process::id()));
+        write::write_study(&dir, &study).unwrap();
+        let csv = std::fs::read_to_string(dir.join("tradeoff.csv")).unwrap();
+        assert_eq!(csv.lines().count(), study.rows.len() + 1);
+        assert!(csv.contains(",diverged,\"diverged at t = "));
+        for f in ["tradeoff.md", "work_precision.svg", "pareto.svg"] {
+            assert!(dir.join(f).is_file(), "{f}");
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 
     #[test]
     fn pareto_front_keeps_only_undominated_finite_points() {

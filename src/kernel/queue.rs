@@ -75,7 +75,9 @@ use super::SimTime;
 /// The discriminants are the order (see the [module docs](self) for the reasons):
 /// `Measurement (0) < Controller (1) < ClockSync (2) < Slot (3) < Sample (4) <
 /// Delivery (5) < PartitionStep (6)`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize,
+)]
 #[repr(u8)]
 pub enum EventClass {
     /// Close the measurement window ending at this time (cost of the window).
@@ -131,7 +133,9 @@ impl fmt::Display for EventClass {
 /// The total-order key of a scheduled event: time, then class, then insertion order.
 ///
 /// The derived `Ord` compares the fields in declaration order.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize,
+)]
 pub struct EventKey {
     /// When the event happens.
     pub time: SimTime,

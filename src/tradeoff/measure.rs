@@ -6,6 +6,7 @@ use std::time::Instant;
 use nalgebra::Vector3;
 
 use crate::cosim::{CoSim, Observer, StepValues};
+use crate::error::Error;
 use crate::kernel::SimTime;
 use crate::progress::Progress;
 use crate::scenario::Scenario;
@@ -65,6 +66,8 @@ pub struct Measured {
     pub repeats: u32,
     /// Steps run (the divergence step excluded).
     pub steps: u64,
+    /// Simulated time of the failure, if the run failed.
+    pub failed_at: Option<SimTime>,
 }
 
 impl Measured {
@@ -79,6 +82,7 @@ impl Measured {
             wall_seconds: f64::NAN,
             repeats: 0,
             steps: 0,
+            failed_at: None,
         }
     }
 }
@@ -142,6 +146,12 @@ pub fn measure(scenario: &Scenario, every: SimTime, counter: &mut Counter) -> Me
     let started = Instant::now();
     let result = world.run_to_end(&mut sampler);
     let wall = started.elapsed().as_secs_f64();
+    let failed_at = match &result {
+        Ok(()) => None,
+        Err(Error::Diverged(d)) => Some(d.time),
+        Err(Error::Numerical { time, .. }) => Some(*time),
+        Err(_) => Some(world.now()),
+    };
     Measured {
         status: match result {
             Ok(()) => Status::Ok,
@@ -154,6 +164,7 @@ pub fn measure(scenario: &Scenario, every: SimTime, counter: &mut Counter) -> Me
         wall_seconds: wall,
         repeats: 1,
         steps: world.steps_done().saturating_sub(1),
+        failed_at,
     }
 }
 

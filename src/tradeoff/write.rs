@@ -122,7 +122,11 @@ fn markdown(study: &Study) -> String {
             "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
             row.knob,
             setting,
-            v.dt() * 1e3,
+            if v.dt().is_finite() {
+                format!("{}", v.dt() * 1e3)
+            } else {
+                "—".into()
+            },
             status,
             sci(v.max_position_error),
             sci(v.rms_position_error),
