@@ -3,7 +3,9 @@
 use crate::scenario::model::{DataKind, Scenario};
 
 /// A message route: a kind of data about one body (or link) from one node to another.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
+)]
 pub struct Route {
     /// What is sent.
     pub kind: DataKind,

@@ -209,7 +209,9 @@ pub enum GhostMode {
 }
 
 /// What a message carries (the `time` distribution routes by this).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
+)]
 pub enum DataKind {
     /// A body's state `(x, ẋ)` (plus the owner-side force), owner → ghosting node.
     State,
@@ -300,7 +302,9 @@ pub enum Problem {
 }
 
 /// How the controller picks the delays the live plant runs at.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
+)]
 pub enum Method {
     /// The Dynamic Simplex Method (SPEC section 5).
     Dsm,
