@@ -192,3 +192,23 @@ fn dsm_beats_no_optimization_on_the_unconstrained_problems() {
         );
     }
 }
+
+#[test]
+fn a_ten_second_period_tracks_the_grid_optimum_worse_than_one_second() {
+    // Thesis: with T = 10 s the DSM fails to follow. Measured as the DSM's mean cost
+    // over the grid optimum's on the same windows (20 s, thesis D_s).
+    let ratio = |name: &str| {
+        let (_, exp) = run(&shipped(name, 20.0, json!(["grid"])));
+        exp.mean("dsm", "dsm").expect("dsm") / exp.mean("grid", "dsm").expect("grid")
+    };
+    let (t1, t10) = (ratio("grid16_space_cp"), ratio("grid16_space_cp_T10"));
+    eprintln!("DSM/grid cost ratio over 20 s: T = 1 s {t1:.3}, T = 10 s {t10:.3}");
+    assert!(
+        t10 > t1,
+        "T = 10 s ({t10}) must track worse than T = 1 s ({t1})"
+    );
+    assert!(
+        t1 >= 1.0 - 1e-12,
+        "the grid optimum is a lower bound on grid points"
+    );
+}
