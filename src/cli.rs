@@ -11,6 +11,19 @@ use clap::{Parser, Subcommand};
 
 use crate::scenario;
 
+/// Prints a line to stdout, ignoring a closed pipe (`dsmcosim run … | head` must not
+/// panic): the work is done and its files are written either way.
+pub fn say(line: std::fmt::Arguments) {
+    use std::io::Write as _;
+    let _ = writeln!(std::io::stdout(), "{line}");
+}
+
+macro_rules! say {
+    ($($arg:tt)*) => {
+        say(format_args!($($arg)*))
+    };
+}
+
 /// Deterministic co-simulator of distributed multi-body simulations with SMC
 /// stabilization and delay optimization.
 #[derive(Debug, Parser)]
@@ -141,7 +154,7 @@ fn run_options(checkpoint_every: Option<f64>) -> crate::Result<crate::run::RunOp
 }
 
 fn report(name: &str, outcome: &crate::run::Outcome, out: &std::path::Path) {
-    println!(
+    say!(
         "{}: {} steps in {:.3} s wall; max |w| = {:.3e} m; mean cost = {:.3e} m; digest {}",
         name,
         outcome.steps,
@@ -150,7 +163,7 @@ fn report(name: &str, outcome: &crate::run::Outcome, out: &std::path::Path) {
         outcome.mean_cost,
         outcome.digest
     );
-    println!("wrote {}", out.display());
+    say!("wrote {}", out.display());
 }
 
 /// Runs one subcommand.
@@ -158,7 +171,7 @@ pub fn execute(command: Command) -> crate::Result<()> {
     match command {
         Command::Validate { scenario } => {
             let s = scenario::load(&scenario)?;
-            println!(
+            say!(
                 "{}: ok — {} bodies, {} links, {} forces, {} steps of {} s, {} path, {} integrator",
                 scenario.display(),
                 s.bodies.len(),
@@ -198,7 +211,7 @@ pub fn execute(command: Command) -> crate::Result<()> {
             tolerance,
         } => {
             let s = scenario::load(&scenario)?;
-            println!("{}", crate::check::execute(&s, &against, tolerance)?);
+            say!("{}", crate::check::execute(&s, &against, tolerance)?);
             Ok(())
         }
         Command::Tradeoff {

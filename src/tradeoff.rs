@@ -3,8 +3,8 @@
 //!
 //! **Work-precision study.** Starting from a scenario (the *base*), every accuracy knob
 //! is turned one at a time ([`knobs`]): `dt`, integrator, `dt` under each other
-//! integrator, the `J_s` solve, the stabilizer, and on partitioned scenes the ghost mode
-//! and the network. Every variant is an edit of the scenario's JSON, re-parsed and
+//! integrator, the `J_s` solve, the stabilizer, the SMC gain, and on partitioned scenes
+//! the ghost mode and the network. Every variant is an edit of the scenario's JSON, re-parsed and
 //! validated like a user's file, so a variant the format refuses is recorded as
 //! `invalid` with the validator's message, and one that diverges is recorded as
 //! `diverged` with the divergence error — neither stops the study.
@@ -12,7 +12,7 @@
 //! ```text
 //!   scenario.json ──(--duration)──▶ base ──edit per knob setting──▶ variants (validated)
 //!        │                                                             │ run, sample p
-//!        └──▶ reference: monolithic RK4, Cholesky, dt_ref = dt/20 ─────┤ compare every 4 dt
+//!        └──▶ reference: monolithic RK4, Cholesky, dt_ref = dt/20 ─────┤ compare every 8 dt
 //!                                                                      ▼
 //!     errors vs reference, max |w|, cost error; wall time, body-steps/s; Pareto front
 //!        ──▶ tradeoff.csv, tradeoff.md, work_precision.svg, pareto.svg
@@ -28,9 +28,11 @@
 //!
 //! Wall time is the fastest of `r` repetitions of the simulation alone (world building
 //! excluded), `r` chosen so that the repetitions of a variant take about
-//! [`measure::MIN_TIMED_SECONDS`] (at most [`measure::MAX_REPEATS`]): runs of a few
+//! [`measure::MIN_TIMED_SECONDS`] (at most [`measure::MAX_REPEATS`]), run round-robin
+//! over the variants so that a change of machine load hits them alike: runs of a few
 //! milliseconds are otherwise dominated by scheduler noise. Wall times are the only
-//! non-deterministic numbers the study writes.
+//! non-deterministic numbers the study writes; the variants run one after the other,
+//! never in parallel, so they do not compete for the cores they are timed on.
 //!
 //! **Stability map** ([`stability`]): the scenario over a grid of SMC `μ` × `dt`, each
 //! cell classified as 0 (ran, `max |w| ≤ ε`), 1 (ran, `max |w| > ε`) or 2 (diverged).
@@ -189,7 +191,7 @@ pub fn command_tradeoff(path: &Path, out: &Path, duration: Option<f64>) -> Resul
             .filter(|v| f(&v.measured.status))
             .count()
     };
-    println!(
+    crate::cli::say(format_args!(
         "{}: {} variants over {} s ({} ok, {} diverged, {} invalid), reference error {:.2e} m",
         study.name,
         study.variants.len(),
@@ -198,8 +200,8 @@ pub fn command_tradeoff(path: &Path, out: &Path, duration: Option<f64>) -> Resul
         count(&|s| matches!(s, Status::Diverged(_))),
         count(&|s| matches!(s, Status::Invalid(_))),
         study.reference_error
-    );
-    println!("wrote {}", out.display());
+    ));
+    crate::cli::say(format_args!("wrote {}", out.display()));
     Ok(())
 }
 
@@ -207,7 +209,7 @@ pub fn command_tradeoff(path: &Path, out: &Path, duration: Option<f64>) -> Resul
 pub fn command_stability_map(path: &Path, out: &Path, duration: Option<f64>) -> Result<()> {
     let map = stability_map(path, out, duration)?;
     let count = |o: u8| map.cells.iter().filter(|c| c.outcome == Some(o)).count();
-    println!(
+    crate::cli::say(format_args!(
         "{}: {} cells over {} s: {} within ε, {} beyond ε, {} diverged",
         map.name,
         map.cells.len(),
@@ -215,8 +217,8 @@ pub fn command_stability_map(path: &Path, out: &Path, duration: Option<f64>) -> 
         count(0),
         count(1),
         count(2)
-    );
-    println!("wrote {}", out.display());
+    ));
+    crate::cli::say(format_args!("wrote {}", out.display()));
     Ok(())
 }
 

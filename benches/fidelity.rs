@@ -1,0 +1,339 @@
+//! Fidelity levels: what each optional feature costs, as ratios on the same scene in one
+//! benchmark run.
+//!
+//! Run: `cargo bench --bench fidelity`. Every case simulates 1 s (1000 explicit-Euler
+//! steps) of the thesis 4×4 grid under the corner load, from a fresh copy of a world
+//! built outside the timed closure. After criterion has measured them, the bench reads
+//! the medians criterion just wrote and prints the ratios:
+//!
+//! - rotation: the rigid-body path against the point-mass path on a centre-anchored scene
+//!   (what a scene without rotation saves by not paying for it);
+//! - partitions: 4 quadrant nodes (ideal channels, τ = 5 ms) against one node;
+//! - the co-simulation against bare integrator steps, split in two: the per-step outputs
+//!   every run needs (gathered `w`, `f`, `p`, `v`, divergence check, cost sum), and the
+//!   rest — event kernel and node structure, what a monolithic scene pays for the
+//!   existence of partitions, networks and controllers;
+//! - recording: digest only, trace.csv at decimation 100, and at decimation 1, against
+//!   no observer.
+//!
+//! TDMA, clock drift and jitter, and the lookahead baselines do not exist yet: their
+//! ratios join this table with their issues.
+
+use std::path::PathBuf;
+use std::time::{Instant, SystemTime};
+
+use criterion::{criterion_group, BatchSize, Criterion, Throughput};
+use dsmcosim::cosim::CoSim;
+use dsmcosim::kernel::SimTime;
+use dsmcosim::multibody::{State, System};
+use dsmcosim::output::AtomicFile;
+use dsmcosim::scenario::{parse_str, Scenario};
+use dsmcosim::trace::Recorder;
+use serde_json::{json, Value};
+
+const GROUP: &str = "fidelity_1s";
+const ONE_SECOND: SimTime = SimTime(1_000_000_000);
+
+fn scene(edit: impl FnOnce(&mut Value)) -> Scenario {
+    let mut v = json!({
+        "name": "fidelity", "seed": 1, "duration": 1.0, "dt": 0.001, "integrator": "euler",
+        "model": {"grid": {"rows": 4, "cols": 4, "spacing": 1.8, "mass": 1.0, "size": 0.2}},
+        "forces": [{"body": 1, "amplitude": [0, 0, 20], "omega": 2.0}],
+    });
+    edit(&mut v);
+    parse_str(&v.to_string(), "bench").expect("valid bench scenario")
+}
+
+/// The scene on 4 quadrant nodes, ideal channels, space distribution, τ = 5 ms.
+fn four_nodes() -> Scenario {
+    scene(|v| {
+        v["partition"] = json!({"quadrants": true});
+        v["channels"] = json!([
+            {"name": "tau1", "tau": 0.005, "borders": [[1, 2], [1, 4]]},
+            {"name": "tau2", "tau": 0.005, "borders": [[2, 3], [3, 4]]}
+        ]);
+    })
+}
+
+/// A recorder of `s` writing trace.csv (to a temporary file that is dropped, never
+/// committed) at `decimation`, or only digesting if `decimation` is `None`.
+fn recorder(s: &Scenario, decimation: Option<u64>, dir: &std::path::Path) -> Recorder {
+    let ids: Vec<u32> = s.bodies.iter().map(|b| b.id).collect();
+    let file =
+        decimation.map(|_| AtomicFile::create(&dir.join("trace.csv")).expect("scratch trace"));
+    Recorder::new(
+        file,
+        decimation.unwrap_or(u64::MAX),
+        s.links.len(),
+        &ids,
+        &s.output.trace_bodies,
+        &s.output.plot_bodies,
+    )
+    .expect("recorder")
+}
+
+/// 1000 integrator steps that also produce what every co-simulation step produces for
+/// any scene: the gathered `w`, `f`, `p`, `v`, the divergence check and the cost sum.
+/// The co-simulation's extra cost over this is its event kernel and node structure —
+/// what a monolithic scene pays for partitions, networks and controllers existing.
+fn steps_with_outputs(sys: &mut System, st: &mut State) -> f64 {
+    let (nl, nb) = (sys.violations().len(), st.p.len());
+    let (mut w, mut f) = (vec![0.0; nl], vec![0.0; nl]);
+    let (mut p, mut v) = (st.p.clone(), st.v.clone());
+    let mut cost = 0.0;
+    for k in 0..1000u64 {
+        let t = SimTime(k * 1_000_000);
+        sys.begin_step(t, st).expect("rates");
+        w.copy_from_slice(sys.violations());
+        for (l, f) in f.iter_mut().enumerate() {
+            *f = sys.tension(st, l);
+        }
+        p[..nb].copy_from_slice(&st.p);
+        v[..nb].copy_from_slice(&st.v);
+        let sane = w
+            .iter()
+            .zip(&f)
+            .all(|(w, f)| w.abs() <= 1.0 && f.is_finite())
+            && p.iter().chain(&v).all(|x| x.iter().all(|c| c.is_finite()));
+        assert!(sane, "bench scene diverged");
+        cost += w.iter().map(|w| w * w).sum::<f64>();
+        sys.finish_step(t, st).expect("step");
+    }
+    std::hint::black_box((&p, &v));
+    cost
+}
+
+fn bench_fidelity(c: &mut Criterion) {
+    let point = scene(|_| {});
+    let rigid = scene(|v| v["body_model"] = json!("rigid"));
+    let nodes = four_nodes();
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("target")
+        .join("bench-scratch");
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+
+    let mut group = c.benchmark_group(GROUP);
+    group.throughput(Throughput::Elements(1000));
+    group.sample_size(40);
+
+    // Bare integrator steps: what the co-simulation wraps.
+    let system = System::new(&point);
+    let state = State::initial(&point);
+    group.bench_function("bare_system_steps", |b| {
+        b.iter_batched_ref(
+            || (system.clone(), state.clone()),
+            |(sys, st)| {
+                for k in 0..1000u64 {
+                    sys.step(SimTime(k * 1_000_000), st).expect("step");
+                }
+            },
+            BatchSize::LargeInput,
+        )
+    });
+    group.bench_function("bare_steps_with_outputs", |b| {
+        b.iter_batched_ref(
+            || (system.clone(), state.clone()),
+            |(sys, st)| steps_with_outputs(sys, st),
+            BatchSize::LargeInput,
+        )
+    });
+    for (name, s) in [
+        ("monolithic_point_mass", &point),
+        ("monolithic_rigid", &rigid),
+        ("four_nodes_tau_5ms", &nodes),
+    ] {
+        let world = CoSim::new(s);
+        group.bench_function(name, |b| {
+            b.iter_batched_ref(
+                || world.clone(),
+                |w| w.advance_to(ONE_SECOND, &mut ()).expect("bench run"),
+                BatchSize::LargeInput,
+            )
+        });
+    }
+    let world = CoSim::new(&point);
+    for (name, decimation) in [
+        ("record_digest_only", None),
+        ("record_trace_decimation_100", Some(100)),
+        ("record_trace_decimation_1", Some(1)),
+    ] {
+        group.bench_function(name, |b| {
+            b.iter_batched_ref(
+                || (world.clone(), recorder(&point, decimation, &dir)),
+                |(w, r)| w.advance_to(ONE_SECOND, r).expect("bench run"),
+                BatchSize::LargeInput,
+            )
+        });
+    }
+    group.finish();
+}
+
+/// The ratios printed: (label, numerator case, denominator case).
+const RATIOS: &[(&str, &str, &str)] = &[
+    (
+        "rotation: rigid ÷ point-mass path",
+        "monolithic_rigid",
+        "monolithic_point_mass",
+    ),
+    (
+        "partitions: 4 nodes (τ = 5 ms) ÷ 1 node",
+        "four_nodes_tau_5ms",
+        "monolithic_point_mass",
+    ),
+    (
+        "co-simulation: monolithic CoSim ÷ bare steps",
+        "monolithic_point_mass",
+        "bare_system_steps",
+    ),
+    (
+        "outputs: bare steps with outputs ÷ bare steps",
+        "bare_steps_with_outputs",
+        "bare_system_steps",
+    ),
+    (
+        "kernel and nodes: monolithic CoSim ÷ steps with outputs",
+        "monolithic_point_mass",
+        "bare_steps_with_outputs",
+    ),
+    (
+        "digest only ÷ no observer",
+        "record_digest_only",
+        "monolithic_point_mass",
+    ),
+    (
+        "trace.csv every 100th step ÷ no observer",
+        "record_trace_decimation_100",
+        "monolithic_point_mass",
+    ),
+    (
+        "trace.csv every step ÷ no observer",
+        "record_trace_decimation_1",
+        "monolithic_point_mass",
+    ),
+];
+
+/// Median time [ns] criterion recorded for `case` since `since`, if it ran.
+fn median(case: &str, since: SystemTime) -> Option<f64> {
+    let home = std::env::var_os("CRITERION_HOME")
+        .map(PathBuf::from)
+        .or_else(|| {
+            std::env::var_os("CARGO_TARGET_DIR").map(|d| PathBuf::from(d).join("criterion"))
+        })
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/criterion"));
+    let path = home.join(GROUP).join(case).join("new/estimates.json");
+    if std::fs::metadata(&path).ok()?.modified().ok()? < since {
+        return None;
+    }
+    let v: Value = serde_json::from_str(&std::fs::read_to_string(path).ok()?).ok()?;
+    v["median"]["point_estimate"].as_f64()
+}
+
+fn print_ratios(since: SystemTime) {
+    println!("\nfidelity ratios (criterion medians of this run, 1 s of the 4×4 grid):");
+    for &(label, num, den) in RATIOS {
+        match (median(num, since), median(den, since)) {
+            (Some(a), Some(b)) => println!(
+                "  {label:<58} {:>6.3}  ({:.3} ms / {:.3} ms)",
+                a / b,
+                a / 1e6,
+                b / 1e6
+            ),
+            _ => println!("  {label:<58} not measured in this run"),
+        }
+    }
+}
+
+/// One timed run of a case [s]; setup (world copy, recorder) is outside the timing.
+type Case = Box<dyn FnMut() -> f64>;
+
+/// The same comparisons as minima of interleaved runs: every round runs each case once,
+/// so a change of machine load hits all of them alike, and the minimum discards the
+/// runs that load slowed down. On a shared machine this is the steadier ratio.
+fn interleaved(rounds: usize) {
+    let point = scene(|_| {});
+    let rigid = scene(|v| v["body_model"] = json!("rigid"));
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("target")
+        .join("bench-scratch");
+    let cosim = |s: &Scenario| -> Case {
+        let world = CoSim::new(s);
+        Box::new(move || {
+            let mut w = world.clone();
+            let t = Instant::now();
+            w.advance_to(ONE_SECOND, &mut ()).expect("bench run");
+            t.elapsed().as_secs_f64()
+        })
+    };
+    let recorded = |s: &Scenario, decimation: Option<u64>| -> Case {
+        let (world, s, dir) = (CoSim::new(s), s.clone(), dir.clone());
+        Box::new(move || {
+            let (mut w, mut r) = (world.clone(), recorder(&s, decimation, &dir));
+            let t = Instant::now();
+            w.advance_to(ONE_SECOND, &mut r).expect("bench run");
+            t.elapsed().as_secs_f64()
+        })
+    };
+    let nodes = four_nodes();
+    let bare = |outputs: bool| -> Case {
+        let (system, state) = (System::new(&point), State::initial(&point));
+        Box::new(move || {
+            let (mut sys, mut st) = (system.clone(), state.clone());
+            let t = Instant::now();
+            if outputs {
+                std::hint::black_box(steps_with_outputs(&mut sys, &mut st));
+            } else {
+                for k in 0..1000u64 {
+                    sys.step(SimTime(k * 1_000_000), &mut st).expect("step");
+                }
+            }
+            t.elapsed().as_secs_f64()
+        })
+    };
+    let mut cases: Vec<(&str, Case)> = vec![
+        ("bare_system_steps", bare(false)),
+        ("bare_steps_with_outputs", bare(true)),
+        ("monolithic_point_mass", cosim(&point)),
+        ("monolithic_rigid", cosim(&rigid)),
+        ("four_nodes_tau_5ms", cosim(&nodes)),
+        ("record_digest_only", recorded(&point, None)),
+        ("record_trace_decimation_100", recorded(&point, Some(100))),
+        ("record_trace_decimation_1", recorded(&point, Some(1))),
+    ];
+    let mut best = vec![f64::INFINITY; cases.len()];
+    for _ in 0..rounds {
+        for (b, (_, case)) in best.iter_mut().zip(cases.iter_mut()) {
+            *b = b.min(case());
+        }
+    }
+    let get = |name: &str| {
+        cases
+            .iter()
+            .position(|(n, _)| *n == name)
+            .map(|i| best[i])
+            .unwrap_or(f64::NAN)
+    };
+    println!("\nthe same, minimum of {rounds} interleaved runs per case:");
+    for &(label, num, den) in RATIOS {
+        let (a, b) = (get(num), get(den));
+        println!(
+            "  {label:<58} {:>6.3}  ({:.3} ms / {:.3} ms)",
+            a / b,
+            a * 1e3,
+            b * 1e3
+        );
+    }
+}
+
+criterion_group!(benches, bench_fidelity);
+
+fn main() {
+    let started = SystemTime::now();
+    benches();
+    Criterion::default().configure_from_args().final_summary();
+    print_ratios(started);
+    // `cargo test --benches` and `--list` only check that the bench runs.
+    let args: Vec<String> = std::env::args().collect();
+    if !args.iter().any(|a| a == "--test" || a == "--list") {
+        interleaved(100);
+    }
+}
