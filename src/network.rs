@@ -3,6 +3,7 @@
 
 pub mod channel;
 pub mod message;
+pub mod tdma;
 
 pub use channel::Channel;
 pub use message::{Message, Payload};

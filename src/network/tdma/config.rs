@@ -1,0 +1,273 @@
+//! The TDMA configuration: slot geometry, link, clocks and processing jitter.
+
+use super::error::TdmaError;
+use super::frame::transmission_time;
+use crate::kernel::SimTime;
+
+/// Processing jitter added to every frame's latency (drawn per frame from the
+/// sender's jitter stream).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub enum Jitter {
+    /// No jitter: nothing is drawn.
+    None,
+    /// Uniform on the whole nanoseconds `0..=max`; `max = 0` draws nothing.
+    Uniform {
+        /// Largest jitter [ns].
+        max: SimTime,
+    },
+    /// Exponential with the given mean, rounded to the nanosecond; `mean = 0` draws
+    /// nothing.
+    Exponential {
+        /// Mean jitter [ns].
+        mean: SimTime,
+    },
+}
+
+impl Jitter {
+    /// Whether any random number is drawn.
+    pub fn is_random(&self) -> bool {
+        match *self {
+            Jitter::None => false,
+            Jitter::Uniform { max } => max > SimTime::ZERO,
+            Jitter::Exponential { mean } => mean > SimTime::ZERO,
+        }
+    }
+}
+
+/// A TDMA network: node 0 is the server, nodes `1..=clients` the clients (client `i`
+/// is partition node `i − 1`, see [`super::tdma_node`]).
+///
+/// A cycle is `cycle` long and made of slots of length `slot`, in this order: the
+/// sync slot (server), one static slot per node (server first, then clients 1..=n),
+/// then `capacity = cycle / slot − (n + 2)` dynamic slots that follow the slot list.
+///
+/// [`TdmaConfig::new`] gives the zero-effect values (no guard, instantaneous link, no
+/// propagation, no header, perfect clocks, no jitter) for every field but the
+/// geometry; a scene sets what it needs.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct TdmaConfig {
+    /// Length of every slot (sync, static and dynamic) [ns]; > 0.
+    pub slot: SimTime,
+    /// Guard time [ns]: the last `guard` of every slot is left silent, so a frame must
+    /// fit in `slot − guard`; it absorbs clock offsets (see the crate docs on
+    /// collisions). `< slot`.
+    pub guard: SimTime,
+    /// Cycle length [ns]: a whole number of slots, at least the sync and static part,
+    /// `(clients + 2) · slot`.
+    pub cycle: SimTime,
+    /// Link rate [bit/s]; > 0, `f64::INFINITY` for an instantaneous link (frames take
+    /// no time on the wire, as on an ideal channel).
+    pub link_rate: f64,
+    /// Propagation delay from any node to any node [ns].
+    pub propagation: SimTime,
+    /// Header bytes of every frame [B]; a sync frame is a bare header.
+    pub header_bytes: u64,
+    /// Number of client nodes `n` (≥ 1); the network has nodes `0..=n`.
+    pub clients: usize,
+    /// Bound of the clients' clock drift [ppm]: each client's rate offset is drawn once,
+    /// uniformly in `[−drift_ppm, +drift_ppm]`; 0 = perfect oscillators, nothing drawn.
+    pub drift_ppm: f64,
+    /// Random walk of the rate offset [ppm/√s]: at every cycle boundary each client's
+    /// rate moves by a normal step of standard deviation `random_walk_ppm · √cycle`
+    /// (not bounded by `drift_ppm`); 0 = off, nothing drawn.
+    pub random_walk_ppm: f64,
+    /// Bound of the residual clock error after a sync [ns]: at every received sync
+    /// frame a client's offset is set to a whole number of ns drawn uniformly in
+    /// `[−sync_error, +sync_error]`; 0 = exact sync, nothing drawn.
+    pub sync_error: SimTime,
+    /// Processing jitter added to every frame's latency.
+    pub jitter: Jitter,
+}
+
+impl TdmaConfig {
+    /// The geometry alone; every other field at its zero-effect value (see the type
+    /// docs).
+    pub fn new(clients: usize, slot: SimTime, cycle: SimTime) -> TdmaConfig {
+        TdmaConfig {
+            slot,
+            guard: SimTime::ZERO,
+            cycle,
+            link_rate: f64::INFINITY,
+            propagation: SimTime::ZERO,
+            header_bytes: 0,
+            clients,
+            drift_ppm: 0.0,
+            random_walk_ppm: 0.0,
+            sync_error: SimTime::ZERO,
+            jitter: Jitter::None,
+        }
+    }
+
+    /// Number of nodes (server + clients).
+    pub fn nodes(&self) -> usize {
+        self.clients + 1
+    }
+
+    /// Usable part of a slot, `slot − guard`.
+    pub fn usable(&self) -> SimTime {
+        SimTime(self.slot.0.saturating_sub(self.guard.0))
+    }
+
+    /// Whether the clocks draw anything (drift, random walk or sync error configured).
+    pub fn clocks_random(&self) -> bool {
+        self.drift_ppm > 0.0 || self.random_walk_ppm > 0.0 || self.sync_error > SimTime::ZERO
+    }
+
+    /// Checks every field; the error names the first bad one.
+    pub fn validate(&self) -> Result<(), TdmaError> {
+        if self.clients == 0 {
+            return Err(TdmaError::config(
+                "clients",
+                "a TDMA network needs at least one client, got 0",
+            ));
+        }
+        if self.slot == SimTime::ZERO {
+            return Err(TdmaError::config("slot", "must be > 0, got 0"));
+        }
+        if self.guard >= self.slot {
+            return Err(TdmaError::config(
+                "guard",
+                format!(
+                    "must be shorter than the slot ({}), got {}",
+                    self.slot, self.guard
+                ),
+            ));
+        }
+        if self.link_rate.is_nan() || self.link_rate <= 0.0 {
+            return Err(TdmaError::config(
+                "link_rate",
+                format!("must be > 0 bit/s (or infinite), got {}", self.link_rate),
+            ));
+        }
+        let statics = self.clients as u64 + 2;
+        let fixed = self.slot.0.checked_mul(statics);
+        if fixed.is_none_or(|f| self.cycle.0 < f) {
+            return Err(TdmaError::config(
+                "cycle",
+                format!(
+                    "{} is shorter than the sync and static part ({} slots of {})",
+                    self.cycle, statics, self.slot
+                ),
+            ));
+        }
+        if self.cycle.0 % self.slot.0 != 0 {
+            return Err(TdmaError::config(
+                "cycle",
+                format!(
+                    "{} must be a whole number of slots of {}",
+                    self.cycle, self.slot
+                ),
+            ));
+        }
+        check_ppm("drift_ppm", self.drift_ppm)?;
+        check_ppm("random_walk_ppm", self.random_walk_ppm)?;
+        let sync = transmission_time(self.header_bytes, self.link_rate);
+        if sync > self.usable() {
+            return Err(TdmaError::FrameTooLong {
+                what: "sync frame (header only)".into(),
+                bytes: self.header_bytes,
+                needed: sync,
+                slot: self.slot,
+                guard: self.guard,
+            });
+        }
+        Ok(())
+    }
+}
+
+/// A ppm value must be finite, ≥ 0 and keep clock rates positive (< 10⁶).
+fn check_ppm(field: &'static str, value: f64) -> Result<(), TdmaError> {
+    if !value.is_finite() || value < 0.0 {
+        return Err(TdmaError::config(
+            field,
+            format!("must be a finite number ≥ 0 ppm, got {value}"),
+        ));
+    }
+    if value >= 1e6 {
+        return Err(TdmaError::config(
+            field,
+            format!("must be below 10⁶ ppm (a clock cannot stop), got {value}"),
+        ));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn good() -> TdmaConfig {
+        let mut c = TdmaConfig::new(3, SimTime(100_000), SimTime(10_000_000));
+        c.guard = SimTime(10_000);
+        c.link_rate = 10e6;
+        c.header_bytes = 16;
+        c
+    }
+
+    fn field_of(c: &TdmaConfig) -> String {
+        c.validate().unwrap_err().to_string()
+    }
+
+    #[test]
+    fn a_good_configuration_passes() {
+        assert_eq!(good().validate(), Ok(()));
+        assert!(!good().clocks_random());
+    }
+
+    #[test]
+    fn each_bad_field_is_named() {
+        type Breaks = Box<dyn Fn(&mut TdmaConfig)>;
+        let cases: Vec<(&str, Breaks)> = vec![
+            ("clients:", Box::new(|c| c.clients = 0)),
+            ("slot:", Box::new(|c| c.slot = SimTime::ZERO)),
+            ("guard:", Box::new(|c| c.guard = c.slot)),
+            ("link_rate:", Box::new(|c| c.link_rate = f64::NAN)),
+            ("link_rate:", Box::new(|c| c.link_rate = -1.0)),
+            ("cycle:", Box::new(|c| c.cycle = SimTime(400_000))),
+            ("cycle:", Box::new(|c| c.cycle = SimTime(10_050_000))),
+            ("drift_ppm:", Box::new(|c| c.drift_ppm = -1.0)),
+            ("drift_ppm:", Box::new(|c| c.drift_ppm = f64::NAN)),
+            ("drift_ppm:", Box::new(|c| c.drift_ppm = 2e6)),
+            (
+                "random_walk_ppm:",
+                Box::new(|c| c.random_walk_ppm = f64::NAN),
+            ),
+            ("random_walk_ppm:", Box::new(|c| c.random_walk_ppm = -0.5)),
+            ("slot:", Box::new(|c| c.header_bytes = 1000)),
+        ];
+        for (field, bad) in cases {
+            let mut c = good();
+            bad(&mut c);
+            let msg = field_of(&c);
+            assert!(msg.starts_with(field), "expected {field} in {msg:?}");
+        }
+    }
+
+    #[test]
+    fn messages_carry_the_offending_value() {
+        let mut c = good();
+        c.drift_ppm = -3.5;
+        assert_eq!(
+            field_of(&c),
+            "drift_ppm: must be a finite number ≥ 0 ppm, got -3.5"
+        );
+        let mut c = good();
+        c.header_bytes = 1000;
+        assert!(
+            field_of(&c).contains("1000 bytes take 0.000800000 s"),
+            "{}",
+            field_of(&c)
+        );
+    }
+
+    #[test]
+    fn jitter_with_zero_width_is_not_random() {
+        assert!(!Jitter::None.is_random());
+        assert!(!Jitter::Uniform { max: SimTime::ZERO }.is_random());
+        assert!(!Jitter::Exponential {
+            mean: SimTime::ZERO
+        }
+        .is_random());
+        assert!(Jitter::Exponential { mean: SimTime(5) }.is_random());
+    }
+}

@@ -1,0 +1,265 @@
+//! Frame sizes and transmission times: a frame is a header plus 8 bytes per `f64`
+//! carried; one frame per (sender, channel) carries that sender's data for every route
+//! of the channel (the medium is a broadcast bus, every receiver hears it).
+
+use std::collections::BTreeMap;
+
+use super::config::TdmaConfig;
+use super::tdma_node;
+use crate::kernel::time::NANOS_PER_SEC;
+use crate::kernel::SimTime;
+use crate::network::Channel;
+use crate::scenario::model::DataKind;
+
+/// Bytes per `f64` on the wire.
+pub const BYTES_PER_FLOAT: u64 = 8;
+
+/// Bytes per entry of a broadcast slot list (a `u16` sender and a `u16` channel).
+pub const LIST_ENTRY_BYTES: u64 = 4;
+
+/// Size of a frame carrying `floats` values [B].
+pub fn frame_bytes(floats: usize, header_bytes: u64) -> u64 {
+    header_bytes.saturating_add((floats as u64).saturating_mul(BYTES_PER_FLOAT))
+}
+
+/// Size of a server static frame carrying `entries` slot-list entries [B].
+pub fn list_broadcast_bytes(entries: usize, header_bytes: u64) -> u64 {
+    header_bytes.saturating_add((entries as u64).saturating_mul(LIST_ENTRY_BYTES))
+}
+
+/// Time on the wire of `bytes` at `rate` [bit/s]: `bytes · 8 / rate`, rounded up to the
+/// nanosecond (a frame never fits a slot by rounding); zero on an infinite rate.
+pub fn transmission_time(bytes: u64, rate: f64) -> SimTime {
+    if rate.is_infinite() || bytes == 0 {
+        return SimTime::ZERO;
+    }
+    let bits = u128::from(bytes) * 8;
+    if rate.fract() == 0.0 && rate <= (1u64 << 53) as f64 {
+        // Exact integer arithmetic for the usual whole-number rates.
+        let r = rate as u128;
+        let ns = (bits * u128::from(NANOS_PER_SEC)).div_ceil(r);
+        return SimTime(u64::try_from(ns).unwrap_or(u64::MAX));
+    }
+    let ns = (bits as f64 * NANOS_PER_SEC as f64 / rate).ceil();
+    SimTime(if ns >= u64::MAX as f64 {
+        u64::MAX
+    } else {
+        ns as u64
+    })
+}
+
+/// Slot-list entries one static frame can carry at most: `None` for any number (an
+/// instantaneous link), `Some(0)` when not even one fits beside the header.
+pub fn entries_per_fragment(cfg: &TdmaConfig) -> Option<usize> {
+    if cfg.link_rate.is_infinite() {
+        return None;
+    }
+    let usable = cfg.usable();
+    let fits = |b: u64| transmission_time(b, cfg.link_rate) <= usable;
+    // The estimate from the rate, then corrected against the exact rounding.
+    let mut bytes = (usable.0 as f64 * cfg.link_rate / 8e9).floor() as u64;
+    while fits(bytes + 1) {
+        bytes += 1;
+    }
+    while bytes > 0 && !fits(bytes) {
+        bytes -= 1;
+    }
+    let entries = bytes.saturating_sub(cfg.header_bytes) / LIST_ENTRY_BYTES;
+    Some(usize::try_from(entries).unwrap_or(usize::MAX))
+}
+
+/// Number of static frames (one per cycle) a list of `entries` entries takes to
+/// broadcast, with `per` entries per frame (see [`entries_per_fragment`]); at least one.
+pub fn broadcast_fragments(entries: usize, per: Option<usize>) -> usize {
+    match per {
+        Some(per) if per > 0 => entries.div_ceil(per).max(1),
+        _ => 1,
+    }
+}
+
+/// Number of `f64` values a route puts on the wire per transfer (the same counts as
+/// [`crate::network::Payload::floats`]).
+pub fn floats_per_route(kind: DataKind, rigid: bool) -> usize {
+    match (kind, rigid) {
+        (DataKind::State, false) => 9,
+        (DataKind::State, true) => 19,
+        (DataKind::Force, false) => 3,
+        (DataKind::Force, true) => 6,
+    }
+}
+
+/// The sending TDMA nodes of each channel (sorted, without repeats), from its routes.
+pub fn senders(channels: &[Channel]) -> Vec<Vec<usize>> {
+    channels
+        .iter()
+        .map(|ch| {
+            let mut s: Vec<usize> = ch.routes.iter().map(|r| tdma_node(r.from)).collect();
+            s.sort_unstable();
+            s.dedup();
+            s
+        })
+        .collect()
+}
+
+/// The size of every (sender, channel) frame [B]; a pair that carries nothing sends a
+/// bare header.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(into = "FrameSizesFile", from = "FrameSizesFile")]
+pub struct FrameSizes {
+    header: u64,
+    bytes: BTreeMap<(usize, usize), u64>,
+}
+
+/// How [`FrameSizes`] is saved: JSON maps need string keys, so pairs go in a list.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct FrameSizesFile {
+    header: u64,
+    frames: Vec<(usize, usize, u64)>,
+}
+
+impl From<FrameSizes> for FrameSizesFile {
+    fn from(f: FrameSizes) -> FrameSizesFile {
+        FrameSizesFile {
+            header: f.header,
+            frames: f.bytes.into_iter().map(|((s, c), b)| (s, c, b)).collect(),
+        }
+    }
+}
+
+impl From<FrameSizesFile> for FrameSizes {
+    fn from(f: FrameSizesFile) -> FrameSizes {
+        FrameSizes {
+            header: f.header,
+            bytes: f.frames.into_iter().map(|(s, c, b)| ((s, c), b)).collect(),
+        }
+    }
+}
+
+impl FrameSizes {
+    /// No data yet: every frame is a bare header.
+    pub fn new(header_bytes: u64) -> FrameSizes {
+        FrameSizes {
+            header: header_bytes,
+            bytes: BTreeMap::new(),
+        }
+    }
+
+    /// The frames of a scene's channels: each route adds [`floats_per_route`] values
+    /// to the frame of its sender (TDMA node) on its channel.
+    pub fn from_channels(channels: &[Channel], rigid: bool, header_bytes: u64) -> FrameSizes {
+        let mut floats: BTreeMap<(usize, usize), usize> = BTreeMap::new();
+        for (c, ch) in channels.iter().enumerate() {
+            for r in &ch.routes {
+                *floats.entry((tdma_node(r.from), c)).or_default() +=
+                    floats_per_route(r.kind, rigid);
+            }
+        }
+        let mut sizes = FrameSizes::new(header_bytes);
+        for ((sender, channel), n) in floats {
+            sizes.set(sender, channel, n);
+        }
+        sizes
+    }
+
+    /// Sets the frame of `sender` on `channel` to carry `floats` values.
+    pub fn set(&mut self, sender: usize, channel: usize, floats: usize) {
+        self.bytes
+            .insert((sender, channel), frame_bytes(floats, self.header));
+    }
+
+    /// Header size [B].
+    pub fn header(&self) -> u64 {
+        self.header
+    }
+
+    /// Size of `sender`'s frame on `channel` [B].
+    pub fn bytes(&self, sender: usize, channel: usize) -> u64 {
+        self.bytes
+            .get(&(sender, channel))
+            .copied()
+            .unwrap_or(self.header)
+    }
+
+    /// Every (sender, channel) pair with data, with its size [B], in order.
+    pub fn iter(&self) -> impl Iterator<Item = ((usize, usize), u64)> + '_ {
+        self.bytes.iter().map(|(&k, &v)| (k, v))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::network::Payload;
+    use nalgebra::{Quaternion, Vector3};
+
+    #[test]
+    fn transmission_time_is_bits_over_rate_rounded_up() {
+        assert_eq!(transmission_time(100, 1e6), SimTime(800_000));
+        assert_eq!(transmission_time(1, 3e9), SimTime(3)); // 8/3 ns → 3
+        assert_eq!(transmission_time(1, 3.5e9), SimTime(3)); // 2.29 ns → 3
+        assert_eq!(transmission_time(1000, f64::INFINITY), SimTime::ZERO);
+        assert_eq!(transmission_time(0, 1e6), SimTime::ZERO);
+    }
+
+    #[test]
+    fn frame_is_header_plus_eight_bytes_per_float() {
+        assert_eq!(frame_bytes(9, 16), 88);
+        assert_eq!(list_broadcast_bytes(10, 16), 56);
+    }
+
+    #[test]
+    fn long_lists_are_broadcast_in_fragments() {
+        let mut cfg = TdmaConfig::new(2, SimTime(100_000), SimTime(1_000_000));
+        cfg.guard = SimTime(10_000);
+        cfg.link_rate = 10e6; // 90 µs = 112.5 bytes: 112 fit
+        cfg.header_bytes = 16;
+        assert_eq!(entries_per_fragment(&cfg), Some(24));
+        assert_eq!(broadcast_fragments(0, Some(24)), 1);
+        assert_eq!(broadcast_fragments(24, Some(24)), 1);
+        assert_eq!(broadcast_fragments(25, Some(24)), 2);
+        cfg.header_bytes = 110;
+        assert_eq!(entries_per_fragment(&cfg), Some(0));
+        cfg.link_rate = f64::INFINITY;
+        assert_eq!(entries_per_fragment(&cfg), None);
+        assert_eq!(broadcast_fragments(1000, None), 1);
+    }
+
+    #[test]
+    fn float_counts_match_the_payloads() {
+        let z = Vector3::zeros();
+        let state = Payload::State {
+            body: 0,
+            p: z,
+            v: z,
+            q: Quaternion::identity(),
+            omega: z,
+            force: z,
+            torque: z,
+        };
+        let force = Payload::Force {
+            link: 0,
+            body: 0,
+            force: z,
+            torque: z,
+        };
+        for rigid in [false, true] {
+            assert_eq!(
+                floats_per_route(DataKind::State, rigid),
+                state.floats(rigid)
+            );
+            assert_eq!(
+                floats_per_route(DataKind::Force, rigid),
+                force.floats(rigid)
+            );
+        }
+    }
+
+    #[test]
+    fn pairs_without_data_send_a_header() {
+        let mut f = FrameSizes::new(16);
+        f.set(2, 0, 18);
+        assert_eq!(f.bytes(2, 0), 16 + 144);
+        assert_eq!(f.bytes(1, 0), 16);
+        assert_eq!(f.iter().collect::<Vec<_>>(), vec![((2, 0), 160)]);
+    }
+}
