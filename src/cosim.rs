@@ -9,13 +9,20 @@
 //!           PartitionStep    every node: rates at t → check → record → step to t + dt
 //! ```
 //!
+//! On a `tdma` network ([`tdma`]) the channels do not sample on their own: a
+//! `ClockSync` event at every cycle start computes the cycle, and each data frame
+//! becomes a `Slot` event at its actual start that samples what the sender has then
+//! and schedules the `Delivery` of its messages (nothing for a lost frame).
+//!
 //! Within a [`EventClass`] at equal time events leave FIFO, so channels sample in
 //! channel order and messages arrive in the order they were sent. Nodes step in node
 //! order inside one `PartitionStep` event; they share nothing during a step, so the
 //! order cannot change a bit of the result.
 
 pub mod event;
+pub mod tdma;
 pub mod world;
 
 pub use event::Event;
+pub use tdma::TdmaLink;
 pub use world::{CoSim, EpochRecord, Observer, StepValues};

@@ -18,9 +18,10 @@ use crate::kernel::SimTime;
 use crate::output::{create_dir_all, write_atomic, AtomicFile};
 use crate::report::{write_line_plot, LinePlot, Scale, Series};
 use crate::scenario::model::{Scenario, Solver, Stabilizer};
-use crate::trace::Recorder;
+use crate::trace::{NetworkLog, Recorder};
 
 mod controlled;
+mod network;
 
 /// What a finished (or diverged) run measured.
 #[derive(Debug, Clone, PartialEq)]
@@ -69,10 +70,22 @@ pub fn run_with(scenario: &Scenario, out: &Path, options: RunOptions) -> Result<
         &scenario.output.plot_bodies,
     )
     .map_err(|e| Error::io(&trace_path, e))?;
+    let world = CoSim::new(scenario);
+    if world.tdma().is_some() {
+        let path = out.join("network.csv");
+        let names = scenario.channels.iter().map(|c| c.name.clone()).collect();
+        let log = NetworkLog::new(
+            Some(AtomicFile::create(&path)?),
+            scenario.output.network_decimation,
+            scenario.output.timeline_cycles,
+            names,
+        )
+        .map_err(|e| Error::io(&path, e))?;
+        recorder.attach_network(log);
+    }
     if options.checkpoint_every.is_some() {
         recorder.keep_lines();
     }
-    let world = CoSim::new(scenario);
     let controller = Controller::new(scenario)?;
     finish(out, world, recorder, controller, options)
 }
@@ -87,6 +100,12 @@ pub fn resume(path: &Path, out: &Path, options: RunOptions) -> Result<Outcome> {
     recorder
         .reattach(AtomicFile::create(&trace_path)?)
         .map_err(|e| Error::io(&trace_path, e))?;
+    if recorder.network().is_some() {
+        let path = out.join("network.csv");
+        recorder
+            .reattach_network(AtomicFile::create(&path)?)
+            .map_err(|e| Error::io(&path, e))?;
+    }
     finish(out, cp.world, recorder, cp.controller, options)
 }
 
@@ -116,6 +135,7 @@ fn finish(
     write_epochs(out, &world, &experiment)?;
     write_summary(out, &world, &outcome, error.as_deref(), &experiment)?;
     write_plots(out, &world, &recorder)?;
+    network::write_plots(out, &world, &recorder)?;
     if world.scenario().controller.is_some() {
         controlled::write_plots(out, &world, &experiment)?;
     }
@@ -216,17 +236,29 @@ fn write_summary(
         } => json!({"kind": "cg", "max_iterations": max_iterations, "tolerance": tolerance}),
     };
     let sim_seconds = SimTime(outcome.steps * scenario.dt.0).as_secs_f64();
+    let epochs = world.epochs();
+    let mean = |f: &dyn Fn(&crate::cosim::EpochRecord) -> f64| {
+        (!epochs.is_empty()).then(|| epochs.iter().map(f).sum::<f64>() / epochs.len() as f64)
+    };
+    let tdma = world.tdma().is_some();
     let channels: Vec<_> = world
         .channels()
         .iter()
-        .map(|c| {
-            json!({
+        .enumerate()
+        .map(|(i, c)| {
+            let mut entry = json!({
                 "name": c.spec.name,
                 "tau": c.tau.as_secs_f64(),
-                "latency": c.latency().as_secs_f64(),
+                "tau_requested": mean(&|e| e.taus[i].0),
+                "tau_achieved": mean(&|e| e.taus[i].1),
+                "tau_achieved_max": epochs.iter().map(|e| e.taus[i].1).fold(None, |m: Option<f64>, x| Some(m.map_or(x, |m| m.max(x)))),
                 "k": c.spec.k,
                 "routes": c.routes.len(),
-            })
+            });
+            if !tdma {
+                entry["latency"] = json!(c.latency().as_secs_f64());
+            }
+            entry
         })
         .collect();
     let summary = json!({
@@ -248,6 +280,8 @@ fn write_summary(
         "messages": outcome.messages,
         "events": outcome.events,
         "channels": channels,
+        "bandwidth_mean": mean(&|e| e.bandwidth),
+        "lost_frames": world.tdma().map_or(0, |l| l.network().lost()),
         "body_model": scenario.body_model.name(),
         "integrator": scenario.integrator.name(),
         "dt": scenario.dt.as_secs_f64(),
@@ -255,6 +289,7 @@ fn write_summary(
         "solver": solver,
     });
     let mut summary = summary;
+    network::summarize(world, &mut summary);
     controlled::summarize(world, exp, &mut summary);
     let mut text = serde_json::to_string_pretty(&summary).unwrap_or_default();
     text.push('\n');

@@ -4,7 +4,9 @@
 
 pub mod compare;
 pub mod digest;
+pub mod network_log;
 pub mod recorder;
 
 pub use digest::Digest;
+pub use network_log::NetworkLog;
 pub use recorder::Recorder;

@@ -104,9 +104,10 @@ fn evaluate(world: &CoSim, delays: &Delays, x: &[f64], t: SimTime, t_end: SimTim
     let Some(taus) = delays.taus(x) else {
         return f64::NAN;
     };
-    let achieved = delays.achieved(&taus);
     let mut fork = world.clone();
-    fork.set_taus(t, &taus, &achieved);
+    let Ok(achieved) = fork.set_taus(t, &taus, &delays.achieved(&taus)) else {
+        return f64::INFINITY;
+    };
     match fork.advance_to(t_end, &mut ()) {
         Ok(()) => match fork.epochs().last() {
             Some(e) if e.t_end == t_end => delays.objective(e.cost, &achieved),
@@ -307,8 +308,12 @@ impl Controller {
             let taus = delays
                 .taus(&live_x)
                 .expect("ok: every method picks feasible delays");
-            let achieved = delays.achieved(&taus);
-            world.set_taus(t, &taus, &achieved);
+            let achieved = world
+                .set_taus(t, &taus, &delays.achieved(&taus))
+                .map_err(|e| crate::error::Error::Numerical {
+                    time: t,
+                    message: format!("the TDMA cycle cannot serve the decided delays: {e}"),
+                })?;
             let run = world.advance_to(t_end, obs);
             let objective = match (&run, world.epochs().last()) {
                 (Ok(()), Some(e)) if e.t_end == t_end => delays.objective(e.cost, &achieved),

@@ -16,4 +16,22 @@ pub enum Event {
     Deliver(Box<Message>),
     /// The measurement window ending at the event's time closes (class `Measurement`).
     WindowEnd,
+    /// A TDMA cycle starts: the protocol computes it (class `ClockSync`).
+    Cycle,
+    /// A TDMA data frame starts: `sender` (TDMA node) samples its data of `channel`,
+    /// delivered at `delivery` (class `Slot`).
+    Frame {
+        /// Channel index.
+        channel: usize,
+        /// Sending TDMA node (partition node + 1).
+        sender: usize,
+        /// When every receiver has it.
+        delivery: crate::kernel::SimTime,
+    },
+    /// A controller's decision reaches the TDMA server after its computing lag
+    /// (class `Controller`): the list scheduled for these periods [s] is broadcast.
+    Decide {
+        /// Requested period per channel [s].
+        requested: Vec<f64>,
+    },
 }

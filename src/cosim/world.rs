@@ -4,14 +4,15 @@ use std::sync::Arc;
 
 use nalgebra::Vector3;
 
-use super::Event;
+use super::{Event, TdmaLink};
 use crate::control::CostMeter;
 use crate::error::{Divergence, Error, Place, Result};
 use crate::kernel::{EventClass, Kernel, SimTime};
 use crate::multibody::dynamics::EvalError;
+use crate::network::tdma::{tdma_node, CycleReport, TdmaError};
 use crate::network::{Channel, Message};
 use crate::partition::{Layout, Node};
-use crate::scenario::model::{DataKind, Scenario};
+use crate::scenario::model::{DataKind, NetworkSpec, Scenario};
 
 /// The values of one step, as observers (trace recorder, digest) see them: the whole
 /// model, gathered from the nodes that own each link and body.
@@ -36,6 +37,15 @@ pub struct StepValues<'a> {
 pub trait Observer {
     /// Called once per step with the values at the step's start.
     fn on_step(&mut self, values: &StepValues) -> std::io::Result<()>;
+
+    /// Called once per TDMA cycle, when it is computed (at its start).
+    fn on_cycle(&mut self, _report: &CycleReport) -> std::io::Result<()> {
+        Ok(())
+    }
+
+    /// Called when a message reaches its receiver at `t` (tests and tools; nothing of
+    /// it reaches the trace).
+    fn on_delivery(&mut self, _t: SimTime, _msg: &Message) {}
 }
 
 /// A watcher that watches nothing.
@@ -69,6 +79,8 @@ pub struct CoSim {
     kernel: Kernel<Event>,
     nodes: Vec<Node>,
     channels: Vec<Channel>,
+    /// The TDMA network, on a `tdma` scene.
+    tdma: Option<Box<TdmaLink>>,
     meter: CostMeter,
     epochs: Vec<EpochRecord>,
     /// (node, local index) holding each link's values.
@@ -112,16 +124,36 @@ impl CoSim {
             k.schedule(t, class, e)
                 .expect("ok: initial events are at or after time zero");
         };
-        for (c, ch) in channels.iter().enumerate() {
-            if !ch.routes.is_empty() {
+        let mut channels = channels;
+        let tdma = match &scenario.network {
+            NetworkSpec::Ideal => {
+                for (c, ch) in channels.iter().enumerate() {
+                    if !ch.routes.is_empty() {
+                        schedule(
+                            &mut kernel,
+                            ch.spec.phase,
+                            EventClass::Sample,
+                            Event::Sample { channel: c },
+                        );
+                    }
+                }
+                None
+            }
+            NetworkSpec::Tdma(_) => {
+                let link = TdmaLink::new(scenario, &channels)
+                    .expect("ok: validation built this network once already");
+                for (ch, tau) in channels.iter_mut().zip(link.nominal_periods()) {
+                    ch.tau = tau;
+                }
                 schedule(
                     &mut kernel,
                     SimTime::ZERO,
-                    EventClass::Sample,
-                    Event::Sample { channel: c },
+                    EventClass::ClockSync,
+                    Event::Cycle,
                 );
+                Some(Box::new(link))
             }
-        }
+        };
         schedule(
             &mut kernel,
             SimTime::ZERO,
@@ -143,6 +175,7 @@ impl CoSim {
             kernel,
             nodes,
             channels,
+            tdma,
             epochs: Vec::new(),
             link_home,
             body_home,
@@ -175,6 +208,11 @@ impl CoSim {
     /// The channels.
     pub fn channels(&self) -> &[Channel] {
         &self.channels
+    }
+
+    /// The TDMA network, on a `tdma` scene.
+    pub fn tdma(&self) -> Option<&TdmaLink> {
+        self.tdma.as_deref()
     }
 
     /// Closed measurement windows.
@@ -218,10 +256,50 @@ impl CoSim {
     }
 
     /// Sets the channel periods from time `at` on (a controller decision): `requested[c]`
-    /// is what was asked [s], `achieved[c]` the period the channel runs at. Each
-    /// channel's pending sample is replaced by one at `at`, so the new period starts
-    /// there; messages already in flight are delivered as scheduled.
-    pub fn set_taus(&mut self, at: SimTime, requested: &[f64], achieved: &[SimTime]) {
+    /// is what was asked [s], `achieved[c]` the period an ideal channel runs at. Each
+    /// ideal channel's pending sample is replaced by one at `at`, so the new period
+    /// starts there; messages already in flight are delivered as scheduled. On a TDMA
+    /// network the requested periods are scheduled into a slot list that the server
+    /// broadcasts after the decision lag and that goes into force once every client
+    /// has confirmed it. Returns the periods the decision achieves (on TDMA, the
+    /// list's nominal periods); an error if the TDMA cycle cannot serve the request.
+    pub fn set_taus(
+        &mut self,
+        at: SimTime,
+        requested: &[f64],
+        achieved: &[SimTime],
+    ) -> std::result::Result<Vec<SimTime>, TdmaError> {
+        if let Some(link) = &mut self.tdma {
+            let same = self
+                .channels
+                .iter()
+                .zip(requested)
+                .all(|(c, &r)| c.requested == r);
+            let sched = link.schedule_secs(requested)?;
+            let periods: Vec<SimTime> = sched
+                .achieved
+                .iter()
+                .map(|p| p.unwrap_or(SimTime(u64::MAX)))
+                .collect();
+            if same {
+                return Ok(periods);
+            }
+            for (ch, &r) in self.channels.iter_mut().zip(requested) {
+                ch.requested = r;
+            }
+            let lag = link.decision_lag();
+            if lag == SimTime::ZERO {
+                link.decide(at, sched.list)?;
+            } else if at.0 + lag.0 < self.scenario.duration.0 {
+                let requested = requested.to_vec();
+                self.schedule(
+                    SimTime(at.0 + lag.0),
+                    EventClass::Controller,
+                    Event::Decide { requested },
+                );
+            }
+            return Ok(periods);
+        }
         for (c, ch) in self.channels.iter_mut().enumerate() {
             if ch.tau == achieved[c] && ch.requested == requested[c] {
                 continue;
@@ -242,6 +320,7 @@ impl CoSim {
                     .expect("ok: a controller acts at the current window boundary");
             }
         }
+        Ok(achieved.to_vec())
     }
 
     /// Processes every event before `t`, and the measurement events at `t` (so the
@@ -278,6 +357,7 @@ impl CoSim {
             }
             Event::Deliver(msg) => {
                 self.messages += 1;
+                obs.on_delivery(t, &msg);
                 self.nodes[msg.to].apply(msg.from, &msg.payload);
                 Ok(())
             }
@@ -285,7 +365,124 @@ impl CoSim {
                 self.window_end(t);
                 Ok(())
             }
+            Event::Cycle => self.cycle(t, obs),
+            Event::Frame {
+                channel,
+                sender,
+                delivery,
+            } => {
+                self.frame(t, channel, sender, delivery);
+                Ok(())
+            }
+            Event::Decide { requested } => {
+                let link = self
+                    .tdma
+                    .as_mut()
+                    .expect("ok: only tdma scenes decide lists");
+                let decided = link
+                    .schedule_secs(&requested)
+                    .and_then(|s| link.decide(t, s.list));
+                decided.map(|_| ()).map_err(|e| Error::Numerical {
+                    time: t,
+                    message: format!("TDMA server: the decided periods cannot be scheduled: {e}"),
+                })
+            }
         }
+    }
+
+    /// A TDMA cycle starts at `t`: computed, traced, its data frames scheduled.
+    fn cycle(&mut self, t: SimTime, obs: &mut dyn Observer) -> Result<()> {
+        let link = self
+            .tdma
+            .as_mut()
+            .expect("ok: only tdma scenes have cycles");
+        let report = link.run_cycle();
+        if report.switch.is_some() {
+            for (ch, tau) in self.channels.iter_mut().zip(link.nominal_periods()) {
+                ch.tau = tau;
+            }
+        }
+        obs.on_cycle(&report)
+            .map_err(|e| Error::io("network.csv", e))?;
+        let end = self.scenario.duration;
+        for f in &report.frames {
+            let (crate::network::tdma::collision::FrameKind::Dynamic { channel }, Some(delivery)) =
+                (f.kind, f.delivery)
+            else {
+                continue;
+            };
+            if f.start >= end {
+                continue;
+            }
+            // A frame is never computed before its cycle starts; only a clock far
+            // beyond any sane drift could start one earlier.
+            let at = f.start.max(t);
+            let sender = f.sender;
+            self.schedule(
+                at,
+                EventClass::Slot,
+                Event::Frame {
+                    channel,
+                    sender,
+                    delivery: delivery.max(at),
+                },
+            );
+        }
+        let cycle = self
+            .tdma
+            .as_ref()
+            .map(|l| l.network().layout().cycle_len())
+            .unwrap_or(SimTime(u64::MAX));
+        let next = SimTime(report.start.0.saturating_add(cycle.0));
+        if next < end {
+            self.schedule(next, EventClass::ClockSync, Event::Cycle);
+        }
+        Ok(())
+    }
+
+    /// A TDMA data frame of `sender` on channel `c` starts at `t`: the sender's messages
+    /// of the channel carry what it has at `t` — its state at the next step boundary
+    /// `⌈t/dt⌉·dt` (the lock-step has already computed it), exactly what an ideal
+    /// channel sampling at that boundary would carry — and arrive at `delivery`.
+    fn frame(&mut self, t: SimTime, c: usize, sender: usize, delivery: SimTime) {
+        let dt = self.scenario.dt.0;
+        let sampled = SimTime(t.0.div_ceil(dt) * dt);
+        if let Some(link) = &mut self.tdma {
+            link.delivered(c, sender, delivery);
+        }
+        for r in 0..self.channels[c].routes.len() {
+            let route = self.channels[c].routes[r];
+            if tdma_node(route.from) != sender {
+                continue;
+            }
+            if let Some(msg) = self.message(sampled, c, r) {
+                if delivery <= self.scenario.duration {
+                    self.schedule(
+                        delivery,
+                        EventClass::Delivery,
+                        Event::Deliver(Box::new(msg)),
+                    );
+                }
+            }
+        }
+    }
+
+    /// The message of route `r` of channel `c`, sampled at `t`.
+    fn message(&self, t: SimTime, c: usize, r: usize) -> Option<Message> {
+        let route = self.channels[c].routes[r];
+        let from = &self.nodes[route.from];
+        let payload = match (route.kind, route.link) {
+            (DataKind::State, _) => from.state_payload(t, route.body, route.to),
+            (DataKind::Force, Some(l)) => from.force_payload(l, route.body),
+            (DataKind::Force, None) => return None,
+        };
+        Some(Message {
+            from: route.from,
+            to: route.to,
+            channel: c,
+            sent: t,
+            payload,
+        })
     }
 
     fn schedule(&mut self, t: SimTime, class: EventClass, event: Event) {
@@ -301,21 +498,10 @@ impl CoSim {
         let latency = self.channels[c].latency();
         let arrive = SimTime(t.0 + latency.0);
         for r in 0..self.channels[c].routes.len() {
-            let route = self.channels[c].routes[r];
-            let from = &self.nodes[route.from];
-            let payload = match (route.kind, route.link) {
-                (DataKind::State, _) => from.state_payload(t, route.body, route.to),
-                (DataKind::Force, Some(l)) => from.force_payload(l, route.body),
-                (DataKind::Force, None) => continue,
-            };
-            if arrive <= self.scenario.duration {
-                let msg = Message {
-                    from: route.from,
-                    to: route.to,
-                    channel: c,
-                    sent: t,
-                    payload,
-                };
+            if arrive > self.scenario.duration {
+                break;
+            }
+            if let Some(msg) = self.message(t, c, r) {
                 self.schedule(arrive, EventClass::Delivery, Event::Deliver(Box::new(msg)));
             }
         }
@@ -328,6 +514,7 @@ impl CoSim {
     /// Closes the measurement window ending at `t`.
     fn window_end(&mut self, t: SimTime) {
         let e = self.meter.close(t).clone();
+        let measured = self.tdma.as_mut().map(|l| l.close_window(t));
         self.epochs.push(EpochRecord {
             t_start: e.t_start,
             t_end: e.t_end,
@@ -335,7 +522,11 @@ impl CoSim {
             taus: self
                 .channels
                 .iter()
-                .map(|c| (c.requested, c.tau.as_secs_f64()))
+                .enumerate()
+                .map(|(i, c)| {
+                    let achieved = measured.as_ref().map_or(c.tau, |m| m[i]);
+                    (c.requested, achieved.as_secs_f64())
+                })
                 .collect(),
             bandwidth: self
                 .channels

@@ -454,6 +454,21 @@ pub struct OutputFile {
         skip_serializing_if = "Option::is_none"
     )]
     pub plot_bodies: Option<Vec<u32>>,
+    /// TDMA: network.csv keeps every frame of every n-th cycle (and every lost frame
+    /// and every cycle in which a list goes into force), ≥ 1; default 1.
+    #[serde(default = "default_network_decimation")]
+    pub network_decimation: u64,
+    /// TDMA: cycles drawn in the slot-timeline plot, ≥ 1; default 3.
+    #[serde(default = "default_timeline_cycles")]
+    pub timeline_cycles: u64,
+}
+
+fn default_network_decimation() -> u64 {
+    1
+}
+
+fn default_timeline_cycles() -> u64 {
+    3
 }
 
 impl Default for OutputFile {
@@ -462,6 +477,8 @@ impl Default for OutputFile {
             decimation: default_decimation(),
             trace_bodies: None,
             plot_bodies: None,
+            network_decimation: default_network_decimation(),
+            timeline_cycles: default_timeline_cycles(),
         }
     }
 }
@@ -530,9 +547,12 @@ pub enum NetworkKind {
     /// latency, nothing lost (the thesis's chapter-3 reading).
     #[default]
     Ideal,
+    /// `"tdma"`: the delays emerge from a TDMA schedule (SPEC section 4): sync slot,
+    /// one static slot per node, a dynamic part that follows the slot list.
+    Tdma,
 }
 
-/// `network`: `{"kind": "ideal"}`.
+/// `network`: `{"kind": "ideal"}` or `{"kind": "tdma", "slot": …, "cycle": …, …}`.
 ///
 /// Kept flat like [`StabilizerFile`] (a `kind` plus the keys of each kind, checked by
 /// validation), so that further network models add a variant and their keys here.
@@ -541,6 +561,152 @@ pub enum NetworkKind {
 pub struct NetworkFile {
     /// Which network model; required inside the section.
     pub kind: NetworkKind,
+    /// TDMA: length of every slot [s]; required for `tdma`.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub slot: Option<f64>,
+    /// TDMA: cycle length [s], a whole number of slots; required for `tdma`.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub cycle: Option<f64>,
+    /// TDMA: guard time at the end of every slot [s]; default 0.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub guard: Option<f64>,
+    /// TDMA: link rate [bit/s]; default: an instantaneous link (frames take no time).
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub link_rate: Option<f64>,
+    /// TDMA: propagation delay [s]; default 0.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub propagation: Option<f64>,
+    /// TDMA: header bytes of every frame [B]; default 0.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub header_bytes: Option<u64>,
+    /// TDMA: bound of each client's clock-rate offset [ppm], drawn once per run; default 0.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub drift_ppm: Option<f64>,
+    /// TDMA: random walk of the rate offset [ppm/√s]; default 0.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub random_walk_ppm: Option<f64>,
+    /// TDMA: bound of the residual clock offset after a sync [s]; default 0.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub sync_error: Option<f64>,
+    /// TDMA: processing jitter added to every frame's latency; default none.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub jitter: Option<JitterFile>,
+    /// TDMA: an explicit slot list (what-if studies); default: scheduled from the
+    /// channels' `tau` (and re-scheduled from every controller decision).
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub slot_list: Option<Vec<SlotEntryFile>>,
+    /// TDMA: time the server needs to compute a decision before broadcasting its list [s]
+    /// (the thesis's `T_s · m_r`); default 0.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub decision_lag: Option<f64>,
+}
+
+/// `network.jitter`: `{"kind": "uniform", "max": s}` or `{"kind": "exponential", "mean": s}`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JitterFile {
+    /// Distribution.
+    pub kind: JitterKind,
+    /// Uniform: largest jitter [s].
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub max: Option<f64>,
+    /// Exponential: mean jitter [s].
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub mean: Option<f64>,
+}
+
+/// `network.jitter.kind`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum JitterKind {
+    /// Uniform on `[0, max]`.
+    Uniform,
+    /// Exponential with mean `mean`.
+    Exponential,
+}
+
+/// `network.slot_list[]`: `{"node": n, "channel": "name"}` (node 0 is the server,
+/// node n ≥ 1 the partition node n) or `{"idle": true}` for a slot nobody uses.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SlotEntryFile {
+    /// Sending node.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub node: Option<usize>,
+    /// Channel name.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub channel: Option<String>,
+    /// `true` for an idle slot.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub idle: Option<bool>,
 }
 
 /// `channels[].kinds` entries: what kind of data a channel carries.
@@ -578,6 +744,15 @@ pub struct ChannelFile {
         skip_serializing_if = "Option::is_none"
     )]
     pub latency: Option<f64>,
+    /// Time of the first sample [s], ≥ 0, a whole number of nanoseconds, below τ
+    /// (`ideal` networks only); default 0. A TDMA pair whose slot sits at this offset
+    /// delivers at the same times (see the README's TDMA section).
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub phase: Option<f64>,
     /// Units per transfer k [1], > 0 (bandwidth used is `Σ k/τ`); default 1 (thesis).
     #[serde(default = "default_channel_k")]
     pub k: f64,

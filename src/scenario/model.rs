@@ -195,6 +195,11 @@ pub struct OutputSpec {
     pub trace_bodies: Vec<usize>,
     /// Indices of the bodies drawn in the body-coordinate plot.
     pub plot_bodies: Vec<usize>,
+    /// TDMA: network.csv keeps every frame of every n-th cycle (plus every lost frame
+    /// and every cycle in which a list goes into force).
+    pub network_decimation: u64,
+    /// TDMA: cycles drawn in the slot-timeline plot.
+    pub timeline_cycles: u64,
 }
 
 /// How a partition treats the far-end bodies of the border links it owns (SPEC section 3).
@@ -255,6 +260,8 @@ pub struct ChannelSpec {
     /// Delivery latency; `None` = equal to τ (the thesis's `x(t − τ)` reading), and
     /// follows τ when a controller changes it.
     pub latency: Option<SimTime>,
+    /// Time of the first sample (ideal networks).
+    pub phase: SimTime,
     /// Units per transfer k (bandwidth used is `Σ k/τ`) [1].
     pub k: f64,
     /// Borders carried (unordered node pairs, 0-based, smaller first); `None` = all.
@@ -283,6 +290,19 @@ impl ChannelSpec {
 pub enum NetworkSpec {
     /// Ideal channels: sample every τ, deliver after the latency, nothing lost.
     Ideal,
+    /// A TDMA network (SPEC section 4): the delays emerge from a slot list.
+    Tdma(Box<TdmaSpec>),
+}
+
+/// A TDMA network of a scenario.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct TdmaSpec {
+    /// Slot geometry, link, clocks and jitter (`clients` = partition nodes).
+    pub config: crate::network::tdma::TdmaConfig,
+    /// An explicit initial slot list; `None` = scheduled from the channels' `tau`.
+    pub slot_list: Option<crate::network::tdma::SlotList>,
+    /// Time from a controller decision to the server's list broadcast (`T_s · m_r`).
+    pub decision_lag: SimTime,
 }
 
 /// The delay-optimization problem (SPEC section 5).

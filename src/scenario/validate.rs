@@ -22,6 +22,7 @@ mod bodies;
 mod channels;
 pub(super) mod checks;
 mod controller;
+mod network;
 mod partition;
 
 use std::collections::BTreeMap;
@@ -30,17 +31,18 @@ use std::path::Path;
 use serde_json::error::Category;
 
 use self::bodies::{model, Ids, Model};
-use self::channels::{channels, network};
+use self::channels::channels;
 use self::checks::{
     finite, foreign, non_negative, num, positive, required, time, vector, whole_nanos,
 };
+use self::network::{check_tdma, network};
 use self::partition::partition;
 use super::file::{
     ForceFile, IntegratorFile, MeasurementFile, OutputFile, ScenarioFile, SolverFile, SolverKind,
     StabilizerFile, StabilizerKind, DEFAULT_CG_MAX_ITERATIONS, DEFAULT_CG_TOLERANCE,
     DEFAULT_MEASUREMENT_PERIOD, DEFAULT_SMC_EPSILON, DEFAULT_SMC_K, DEFAULT_SMC_MU,
 };
-use super::model::{ForceSpec, Integrator, OutputSpec, Scenario, Solver, Stabilizer};
+use super::model::{ForceSpec, Integrator, NetworkSpec, OutputSpec, Scenario, Solver, Stabilizer};
 use crate::error::{Error, Result};
 use crate::kernel::SimTime;
 
@@ -172,8 +174,16 @@ pub fn validate(file: ScenarioFile) -> Result<Scenario> {
         )?),
         None => None,
     };
-    let network = network(&file.network)?;
     let channels = channels(&file.channels, partition.as_ref(), &links, dt)?;
+    let network = network(&file.network, partition.as_ref(), &channels)?;
+    if matches!(network, NetworkSpec::Tdma(_)) {
+        if let Some(i) = file.channels.iter().position(|c| c.phase.is_some()) {
+            return Err(Error::invalid(
+                format!("channels[{i}].phase"),
+                "is not used by a \"tdma\" network (the slot list places the samples)",
+            ));
+        }
+    }
     let controller = match &file.controller {
         Some(c) => Some(controller::controller(
             c,
@@ -185,7 +195,7 @@ pub fn validate(file: ScenarioFile) -> Result<Scenario> {
         None => None,
     };
 
-    Ok(Scenario {
+    let scenario = Scenario {
         name: file.name,
         seed: file.seed,
         duration,
@@ -205,7 +215,9 @@ pub fn validate(file: ScenarioFile) -> Result<Scenario> {
         network,
         channels,
         controller,
-    })
+    };
+    check_tdma(&scenario)?;
+    Ok(scenario)
 }
 
 /// `dt` and `duration` in nanoseconds: `dt` ≥ 1 ns and a whole number of nanoseconds,
@@ -422,10 +434,24 @@ fn output(o: &OutputFile, ids: &Ids, body_count: usize) -> Result<OutputSpec> {
         None if body_count == 1 => vec![0],
         None => vec![0, body_count - 1],
     };
+    if o.network_decimation == 0 {
+        return Err(Error::invalid(
+            "output.network_decimation",
+            "must be ≥ 1 (got 0)",
+        ));
+    }
+    if o.timeline_cycles == 0 {
+        return Err(Error::invalid(
+            "output.timeline_cycles",
+            "must be ≥ 1 (got 0)",
+        ));
+    }
     Ok(OutputSpec {
         decimation: o.decimation,
         trace_bodies,
         plot_bodies,
+        network_decimation: o.network_decimation,
+        timeline_cycles: o.timeline_cycles,
     })
 }
 

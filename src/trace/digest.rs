@@ -9,6 +9,11 @@
 //! of the digest in 32 bytes, so a checkpoint can store it and a resumed run continues
 //! the very same chain.
 //!
+//! On a TDMA scene each cycle adds a record too, when it is computed (at its start, in
+//! event order between the steps): the cycle's start [ns], then per frame in slot order
+//! its slot, sender, actual start [ns] and delivery [ns] (`u64::MAX` if lost), each a
+//! little-endian `u64` — so a run's digest also pins every frame's timing.
+//!
 //! Every step is hashed, whatever the trace decimation or the traced-body selection, so
 //! changing the output options never changes the digest; `-0.0` and `0.0` hash
 //! differently, as they are different bits.

@@ -7,7 +7,9 @@ use crate::cosim::{Observer, StepValues};
 use crate::output::AtomicFile;
 use crate::report::Series;
 
+use super::network_log::NetworkLog;
 use super::Digest;
+use crate::network::tdma::CycleReport;
 
 /// At most this many links get their own series in the constraint plot; larger models
 /// plot the envelope `max_l |w_l|` only.
@@ -34,6 +36,8 @@ pub struct Recorder {
     link_series: Vec<Vec<f64>>,
     envelope: Vec<f64>,
     body_series: Vec<[Vec<f64>; 3]>,
+    /// network.csv and the timeline cycles, on a TDMA scene.
+    network: Option<NetworkLog>,
 }
 
 impl Recorder {
@@ -62,6 +66,7 @@ impl Recorder {
             link_series: vec![Vec::new(); link_count.min(MAX_PLOTTED_LINKS + 1)],
             envelope: Vec::new(),
             body_series: vec![Default::default(); plot_bodies.len()],
+            network: None,
         };
         if link_count > MAX_PLOTTED_LINKS {
             r.link_series.clear();
@@ -160,6 +165,28 @@ impl Recorder {
         if self.kept.is_none() {
             self.kept = Some(std::mem::take(&mut self.line));
         }
+        if let Some(n) = &mut self.network {
+            n.keep_lines();
+        }
+    }
+
+    /// Records the TDMA cycles of the run into `log` (network.csv).
+    pub fn attach_network(&mut self, log: NetworkLog) {
+        self.network = Some(log);
+    }
+
+    /// The TDMA log, on a TDMA scene.
+    pub fn network(&self) -> Option<&NetworkLog> {
+        self.network.as_ref()
+    }
+
+    /// Attaches a new network.csv to a restored recorder (a TDMA run's) and writes the
+    /// kept lines to it.
+    pub fn reattach_network(&mut self, file: AtomicFile) -> std::io::Result<()> {
+        match &mut self.network {
+            Some(n) => n.reattach(file),
+            None => Ok(()),
+        }
     }
 
     /// Attaches a new trace file to a restored recorder and writes the kept lines to it.
@@ -173,6 +200,9 @@ impl Recorder {
 
     /// Closes the trace file (renaming it into place).
     pub fn commit(&mut self) -> crate::Result<()> {
+        if let Some(n) = &mut self.network {
+            n.commit()?;
+        }
         match self.file.take() {
             Some(f) => f.commit(),
             None => Ok(()),
@@ -215,6 +245,24 @@ impl Recorder {
 impl Observer for Recorder {
     fn on_step(&mut self, values: &StepValues) -> std::io::Result<()> {
         self.record(values)
+    }
+
+    /// A TDMA cycle: its record goes into the digest chain (see [`super::digest`]) and
+    /// its frames into network.csv.
+    fn on_cycle(&mut self, report: &CycleReport) -> std::io::Result<()> {
+        self.digest.time(report.start.as_nanos());
+        for f in &report.frames {
+            self.digest.time(f.slot as u64);
+            self.digest.time(f.sender as u64);
+            self.digest.time(f.start.as_nanos());
+            self.digest
+                .time(f.delivery.map_or(u64::MAX, |d| d.as_nanos()));
+        }
+        self.digest.end_step();
+        match &mut self.network {
+            Some(n) => n.record(report),
+            None => Ok(()),
+        }
     }
 }
 

@@ -843,6 +843,7 @@ fn partition_sections(
         name: name.to_string(),
         tau: (dt_ns * tau_steps) as f64 / 1e9,
         latency: latency_us.map(|us| us as f64 / 1e6),
+        phase: None,
         k: 1.0,
         borders: None,
         kinds,
@@ -941,6 +942,7 @@ fn scenario() -> impl Strategy<Value = ScenarioFile> {
                     decimation,
                     trace_bodies,
                     plot_bodies,
+                    ..OutputFile::default()
                 },
                 partition,
                 controller: None,
@@ -985,4 +987,69 @@ fn grid_files_survive_a_json_round_trip() {
     let s = parse_str(&text, "grid.json").unwrap();
     assert_eq!((s.bodies.len(), s.links.len()), (15, 22));
     assert_eq!(s, validate(file).unwrap());
+}
+
+/// `part_base()` on a TDMA network (channels without latency).
+fn tdma_base() -> Value {
+    let mut doc = remove_from_value(part_base(), "/channels/0/latency");
+    doc["network"] = json!({
+        "kind": "tdma", "slot": 0.0001, "cycle": 0.005, "guard": 0.00001,
+        "link_rate": 100e6, "header_bytes": 26, "drift_ppm": 50
+    });
+    doc
+}
+
+fn remove_from_value(mut doc: Value, pointer: &str) -> Value {
+    let (parent, key) = pointer.rsplit_once('/').expect("pointer starts with /");
+    if let Some(Value::Object(map)) = doc.pointer_mut(parent) {
+        map.remove(key);
+    }
+    doc
+}
+
+fn set_tdma(pointer: &str, value: Value) -> String {
+    put(tdma_base(), pointer, value).to_string()
+}
+
+#[test]
+fn tdma_base_is_valid() {
+    parse_str(&tdma_base().to_string(), "tdma.json").expect("tdma base validates");
+}
+
+#[test]
+#[rustfmt::skip]
+fn tdma_configurations_are_checked() {
+    let list = |l: Value| set_tdma("/network/slot_list", l);
+    invalid(set_tdma("/network/drift_ppm", json!(-5)), "network.drift_ppm", "must be ≥ 0 (got -5)");
+    invalid(set_tdma("/network/random_walk_ppm", json!(-0.1)), "network.random_walk_ppm", "got -0.1");
+    invalid(set_tdma("/network/drift_ppm", json!(2e6)), "network.drift_ppm", "below 10⁶ ppm");
+    invalid(set_tdma("/network/slot", json!(0)), "network.slot", "must be > 0");
+    invalid(set_tdma("/network/guard", json!(0.0001)), "network.guard", "shorter than the slot");
+    invalid(set_tdma("/network/cycle", json!(0.0005)), "network.cycle", "shorter than the sync and static part (6 slots");
+    invalid(set_tdma("/network/cycle", json!(0.00505)), "network.cycle", "whole number of slots");
+    invalid(set_tdma("/network/link_rate", json!(0)), "network.link_rate", "must be > 0");
+    invalid(set_tdma("/network/jitter", json!({"kind": "uniform"})), "network.jitter.max", "required for kind \"uniform\"");
+    invalid(set_tdma("/network/jitter", json!({"kind": "uniform", "mean": 1e-5})), "network.jitter.mean", "not a key of kind \"uniform\"");
+    invalid(set_tdma("/network/colour", json!(1)), "network.colour", "unknown field");
+    invalid(set_part("/network/slot", json!(0.0001)), "network.slot", "not a key of kind \"ideal\"");
+    invalid(remove_from(tdma_base(), "/network/cycle"), "network.cycle", "required for kind \"tdma\"");
+    // A slot shorter than a frame: node 1's state frame (4 states × 9 floats + header)
+    // takes 31 µs at 10 Mbit/s… 310 µs, more than the 90 µs usable.
+    invalid(set_tdma("/network/link_rate", json!(10e6)), "network.slot", "is shorter than the largest frame");
+    // Cycle too short for the list: 44 dynamic slots, 45 entries.
+    let entry = json!({"node": 1, "channel": "tau1"});
+    invalid(list(json!(vec![entry.clone(); 45])), "network.slot_list", "45 entries do not fit the cycle, whose dynamic part holds 44");
+    invalid(list(json!([{"node": 9, "channel": "tau1"}])), "network.slot_list[0].node", "unknown node 9 (nodes are 0 (server) to 4)");
+    invalid(list(json!([{"node": 1, "channel": "tau9"}])), "network.slot_list[0].channel", "unknown channel \"tau9\"");
+    invalid(list(json!([{"node": 1}])), "network.slot_list[0].channel", "required");
+    invalid(list(json!([{"idle": true, "node": 1}])), "network.slot_list[0]", "an idle slot names no");
+    // A period the cycle cannot serve: τ below the sync + static gap.
+    invalid(set_tdma("/channels/0/tau", json!(0.0)), "channels[0].tau", "must be > 0");
+    invalid(put(put(tdma_base(), "/dt", json!(0.0001)), "/channels/0/tau", json!(0.0003)).to_string(), "channels[0].tau", "shortest period the cycle allows");
+    invalid(set_tdma("/channels/0/latency", json!(0.001)), "channels[0].latency", "not used by a \"tdma\" network");
+    invalid(set_tdma("/channels/0/phase", json!(0.001)), "channels[0].phase", "not used by a \"tdma\" network");
+    invalid(set_part("/channels/0/phase", json!(0.005)), "channels[0].phase", "must be below the period");
+    let mono = put(tdma_base(), "/partition", Value::Null);
+    let mono = remove_from_value(remove_from_value(mono, "/partition"), "/channels");
+    invalid(mono.to_string(), "network.kind", "needs a `partition` section");
 }

@@ -10,15 +10,8 @@ use std::collections::{BTreeMap, BTreeSet};
 use super::checks::{num, positive, time, whole_nanos};
 use crate::error::{Error, Result};
 use crate::kernel::SimTime;
-use crate::scenario::file::{ChannelFile, DataKindFile, NetworkFile, NetworkKind};
-use crate::scenario::model::{ChannelSpec, DataKind, LinkSpec, NetworkSpec, PartitionSpec};
-
-/// The `network` section.
-pub(super) fn network(n: &NetworkFile) -> Result<NetworkSpec> {
-    match n.kind {
-        NetworkKind::Ideal => Ok(NetworkSpec::Ideal),
-    }
-}
+use crate::scenario::file::{ChannelFile, DataKindFile};
+use crate::scenario::model::{ChannelSpec, DataKind, LinkSpec, PartitionSpec};
 
 /// The borders of a partition: node pairs (0-based, smaller first) joined by at least
 /// one link, in order.
@@ -130,6 +123,20 @@ fn channel(
         Some(secs) => Some(whole_nanos(&format!("{path}.latency"), secs)?),
         None => None,
     };
+    let phase = match c.phase {
+        Some(secs) => whole_nanos(&format!("{path}.phase"), secs)?,
+        None => SimTime::ZERO,
+    };
+    if phase >= tau {
+        return Err(Error::invalid(
+            format!("{path}.phase"),
+            format!(
+                "must be below the period τ = {} s (got {} s)",
+                num(tau.as_secs_f64()),
+                num(phase.as_secs_f64())
+            ),
+        ));
+    }
     let k = positive(&format!("{path}.k"), c.k)?;
     let borders = match &c.borders {
         Some(list) => Some(channel_borders(
@@ -148,6 +155,7 @@ fn channel(
         name: c.name.clone(),
         tau,
         latency,
+        phase,
         k,
         borders,
         kinds,
