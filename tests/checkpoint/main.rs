@@ -68,7 +68,24 @@ fn check_resume(name: &str, v: &Value, every: f64, expected_checkpoints: usize) 
             "{name}: resumed from {}",
             cp.display()
         );
-        for f in ["trace.csv", "epochs.csv"] {
+        for f in ["trace.csv", "epochs.csv", "network.csv", "summary.json"] {
+            let stored = dir.join("full").join(f);
+            if !stored.exists() {
+                continue;
+            }
+            if f == "summary.json" {
+                // Wall times differ; everything the network and controller report
+                // must not.
+                let strip = |p: &Path| {
+                    let mut s: Value = serde_json::from_slice(&read(p)).unwrap();
+                    for k in ["wall_seconds", "real_time_factor"] {
+                        s.as_object_mut().unwrap().remove(k);
+                    }
+                    s
+                };
+                assert_eq!(strip(&out.join(f)), strip(&stored), "{name}: {f}");
+                continue;
+            }
             assert!(
                 read(&out.join(f)) == read(&dir.join("full").join(f)),
                 "{name}: {f} differs after resuming from {}",
@@ -104,6 +121,23 @@ fn partitioned_fixed_delay_run_resumes_with_messages_in_flight() {
     v["duration"] = json!(4.0);
     // 0.5035 s: mid-period for the 5 ms channels, messages in flight.
     check_resume("fixed", &v, 0.5035, 7);
+}
+
+#[test]
+fn tdma_run_with_drift_and_jitter_resumes_bit_for_bit() {
+    let mut v = shipped("tdma4_space_fixed");
+    v["duration"] = json!(3.0);
+    v["output"]["network_decimation"] = json!(7);
+    // 0.5023 s: mid-cycle (5 ms cycles), frames and messages in flight.
+    check_resume("tdma", &v, 0.5023, 5);
+}
+
+#[test]
+fn controlled_tdma_run_resumes_with_its_pending_lists() {
+    let mut v = shipped("tdma4_space_cp");
+    v["duration"] = json!(4.0);
+    v["controller"]["surface_window"] = json!(2.0);
+    check_resume("tdma_cp", &v, 1.0, 3);
 }
 
 #[test]

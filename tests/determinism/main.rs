@@ -15,8 +15,21 @@ use dsmcosim::kernel::SimTime;
 use dsmcosim::scenario::Scenario;
 use dsmcosim::trace::Recorder;
 
-/// One monolithic and one partitioned (4 nodes, space distribution, τ = 5 ms) scenario.
-const SCENARIOS: [&str; 2] = ["grid16_monolithic", "grid16_space_fixed"];
+/// One monolithic, one partitioned (4 nodes, space distribution, τ = 5 ms) and one
+/// TDMA scenario (the same on a TDMA network with clock drift, random walk, sync error
+/// and jitter).
+const SCENARIOS: [&str; 3] = [
+    "grid16_monolithic",
+    "grid16_space_fixed",
+    "tdma4_space_fixed",
+];
+
+/// The scenarios that configure no random source.
+const NOT_RANDOM: [&str; 3] = [
+    "grid16_monolithic",
+    "grid16_space_fixed",
+    "grid16_time_fixed",
+];
 
 fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -106,12 +119,10 @@ fn a_forked_world_finishes_with_the_unforked_digest() {
     }
 }
 
-/// No shipped scenario configures a random source yet, so the seed must not reach the
-/// trace. When TDMA clock drift and jitter land, this gets its other half: on a
-/// scenario that configures them, a changed seed changes the digest.
+/// Without a random source the seed must not reach the trace.
 #[test]
 fn a_changed_seed_changes_nothing_without_randomness() {
-    for name in SCENARIOS.iter().chain(&["grid16_time_fixed"]) {
+    for name in NOT_RANDOM {
         let s = load(name);
         let base = digest(&s);
         for seed in [s.seed.wrapping_add(1), 0, u64::MAX] {
@@ -157,4 +168,48 @@ fn rayon_thread_count_does_not_change_the_digest() {
         assert_eq!(one, two, "{name}: RAYON_NUM_THREADS=1 and 2 differ");
         assert_eq!(one, digest(&load(name)).digest, "{name}: binary vs library");
     }
+}
+
+/// On a TDMA scene with drift and jitter the seed reaches the trace; with every random
+/// source of the same scene set to zero it does not, and nothing is drawn.
+#[test]
+fn a_changed_seed_changes_the_run_only_where_randomness_is_configured() {
+    let s = load("tdma4_space_fixed");
+    let base = digest(&s);
+    let mut other = s.clone();
+    other.seed = s.seed + 1;
+    assert_ne!(digest(&other), base, "drift and jitter follow the seed");
+
+    let mut quiet = s.clone();
+    if let dsmcosim::scenario::model::NetworkSpec::Tdma(t) = &mut quiet.network {
+        t.config.drift_ppm = 0.0;
+        t.config.random_walk_ppm = 0.0;
+        t.config.sync_error = SimTime::ZERO;
+        t.config.jitter = dsmcosim::network::tdma::Jitter::None;
+    }
+    let quiet_digest = digest(&quiet);
+    let mut quiet_other = quiet.clone();
+    quiet_other.seed = 0;
+    assert_eq!(digest(&quiet_other), quiet_digest);
+    let mut world = CoSim::new(&quiet);
+    world.run_to_end(&mut ()).expect("runs");
+    let net = world.tdma().expect("tdma").network();
+    assert_eq!(net.words_drawn(), 0, "no random source, nothing drawn");
+}
+
+/// A DSM-controlled TDMA run (forks, grid search on rayon, list decisions through the
+/// confirmation protocol) gives the same digest on 1 and 2 threads.
+#[test]
+fn a_controlled_tdma_run_is_the_same_on_one_and_two_threads() {
+    let scratch = Path::new(env!("CARGO_TARGET_TMPDIR")).join("determinism_tdma_cp");
+    std::fs::create_dir_all(&scratch).expect("scratch dir");
+    let text = std::fs::read_to_string(scenario_file("tdma4_space_cp")).expect("scenario");
+    let mut v: serde_json::Value = serde_json::from_str(&text).expect("json");
+    v["duration"] = serde_json::json!(4.0);
+    v["controller"]["surface_window"] = serde_json::json!(2.0);
+    let file = scratch.join("tdma4_space_cp_short.json");
+    std::fs::write(&file, v.to_string()).expect("write scenario");
+    let one = run_binary(&file, &scratch.join("1"), "1");
+    let two = run_binary(&file, &scratch.join("2"), "2");
+    assert_eq!(one, two, "RAYON_NUM_THREADS=1 and 2 differ");
 }
