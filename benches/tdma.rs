@@ -1,0 +1,129 @@
+//! TDMA against ideal channels on the 16-node scene, as ratios measured in one run.
+//!
+//! Run: `cargo bench --bench tdma`. Every case simulates 1 s of `tdma16_space_fixed`
+//! (8×8 grid on 16 quadrant nodes, two delay classes at 5 ms; 1000 lock-steps) from a
+//! fresh copy of a world built outside the timed closure:
+//!
+//! - `ideal`: the same channels on ideal channels with zero latency (sample and hold,
+//!   what TDMA's microsecond latencies approximate);
+//! - `tdma_plain`: the TDMA network without drift, random walk, sync error or jitter
+//!   (nothing is drawn);
+//! - `tdma_full`: the shipped scenario, drift 50 ppm + random walk + sync error +
+//!   exponential jitter.
+//!
+//! After criterion has measured them, the bench prints each case's kernel events per
+//! wall second and real-time factor, and the ratios against `ideal`, all from the
+//! medians of this run.
+
+use std::path::PathBuf;
+use std::time::SystemTime;
+
+use criterion::{criterion_group, BatchSize, Criterion, Throughput};
+use dsmcosim::cosim::CoSim;
+use dsmcosim::kernel::SimTime;
+use dsmcosim::scenario::parse_str;
+use serde_json::{json, Value};
+
+const GROUP: &str = "tdma16_1s";
+const ONE_SECOND: SimTime = SimTime(1_000_000_000);
+const CASES: [&str; 3] = ["ideal", "tdma_plain", "tdma_full"];
+
+fn shipped() -> Value {
+    let p = format!(
+        "{}/scenarios/tdma16_space_fixed.json",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let mut v: Value =
+        serde_json::from_str(&std::fs::read_to_string(p).expect("scenario")).expect("json");
+    v["duration"] = json!(1.0);
+    v
+}
+
+fn world(case: &str) -> CoSim {
+    let mut v = shipped();
+    match case {
+        "ideal" => {
+            v["network"] = json!({"kind": "ideal"});
+            for c in v["channels"].as_array_mut().expect("channels") {
+                c["latency"] = json!(0.0);
+            }
+        }
+        "tdma_plain" => {
+            let n = v["network"].as_object_mut().expect("network");
+            for key in ["drift_ppm", "random_walk_ppm", "sync_error", "jitter"] {
+                n.remove(key);
+            }
+        }
+        _ => {}
+    }
+    CoSim::new(&parse_str(&v.to_string(), case).expect("valid bench scenario"))
+}
+
+fn bench_tdma(c: &mut Criterion) {
+    let mut group = c.benchmark_group(GROUP);
+    group.throughput(Throughput::Elements(1000));
+    group.sample_size(20);
+    for case in CASES {
+        let w = world(case);
+        group.bench_function(case, |b| {
+            b.iter_batched_ref(
+                || w.clone(),
+                |w| w.advance_to(ONE_SECOND, &mut ()).expect("bench run"),
+                BatchSize::LargeInput,
+            )
+        });
+    }
+    group.finish();
+}
+
+/// Median time [ns] criterion recorded for `case` since `since`, if it ran.
+fn median(case: &str, since: SystemTime) -> Option<f64> {
+    let home = std::env::var_os("CRITERION_HOME")
+        .map(PathBuf::from)
+        .or_else(|| {
+            std::env::var_os("CARGO_TARGET_DIR").map(|d| PathBuf::from(d).join("criterion"))
+        })
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/criterion"));
+    let path = home.join(GROUP).join(case).join("new/estimates.json");
+    if std::fs::metadata(&path).ok()?.modified().ok()? < since {
+        return None;
+    }
+    let v: Value = serde_json::from_str(&std::fs::read_to_string(path).ok()?).ok()?;
+    v["median"]["point_estimate"].as_f64()
+}
+
+fn print_table(since: SystemTime) {
+    println!("\n16-node scene, 1 s simulated (criterion medians of this run):");
+    println!(
+        "  {:<11} {:>10} {:>12} {:>14} {:>8} {:>11}",
+        "case", "wall [ms]", "events", "events/s", "RTF", "vs ideal"
+    );
+    let ideal = median("ideal", since);
+    for case in CASES {
+        let Some(ns) = median(case, since) else {
+            println!("  {case:<11} (not measured in this run)");
+            continue;
+        };
+        let mut w = world(case);
+        w.advance_to(ONE_SECOND, &mut ()).expect("run");
+        let events = w.events();
+        let secs = ns / 1e9;
+        println!(
+            "  {case:<11} {:>10.2} {:>12} {:>14.3e} {:>8.1} {:>11}",
+            ns / 1e6,
+            events,
+            events as f64 / secs,
+            1.0 / secs,
+            ideal.map_or("—".into(), |i| format!("{:.3}×", ns / i)),
+        );
+    }
+}
+
+criterion_group!(benches, bench_tdma);
+
+fn main() {
+    let started = SystemTime::now();
+    benches();
+    Criterion::default().configure_from_args().final_summary();
+    print_table(started);
+}
