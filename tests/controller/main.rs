@@ -212,3 +212,37 @@ fn a_ten_second_period_tracks_the_grid_optimum_worse_than_one_second() {
         "the grid optimum is a lower bound on grid points"
     );
 }
+
+#[test]
+fn through_tdma_slot_lists_dsm_follows_the_grid_optimum() {
+    // Thesis chapter 4: the same behaviour when the delays come from slot lists. Every
+    // decision (live and on every fork) goes through the scheduler and the list
+    // confirmation; the live run's switches are in the world's TDMA state.
+    let s = shipped("tdma4_space_cp", 8.0, json!(["grid", "no_opt"]));
+    let mut world = dsmcosim::cosim::CoSim::new(&s);
+    let mut ctl = dsmcosim::control::experiment::Controller::new(&s)
+        .expect("valid")
+        .expect("a controller");
+    ctl.run_until(&mut world, &mut (), s.duration)
+        .expect("runs");
+    let exp = &ctl.experiment;
+    let dsm = exp.mean("dsm", "dsm").expect("dsm");
+    let grid = exp.mean("grid", "dsm").expect("grid");
+    let no_opt = exp.mean("no_opt", "dsm").expect("no_opt");
+    eprintln!("TDMA 4 nodes, 8 s: DSM {dsm:.4}, grid {grid:.4}, no-opt {no_opt:.4} m");
+    assert!(
+        dsm >= grid - 1e-12,
+        "the grid optimum bounds the grid points"
+    );
+    assert!(dsm / grid < 1.15, "DSM/grid {}", dsm / grid);
+    assert!(dsm < no_opt, "DSM {dsm} vs no-optimization {no_opt}");
+    let link = world.tdma().expect("a tdma world");
+    let switches = link.switches();
+    assert!(!switches.is_empty(), "DSM changed the delays");
+    let cycle = link.network().layout().cycle_len().as_nanos();
+    for sw in switches {
+        assert_eq!(sw.effective_at.as_nanos() % cycle, 0, "a cycle boundary");
+        let lag = sw.effective_at.as_nanos() - sw.decided_at.as_nanos();
+        assert!(lag <= 2 * cycle, "lag {lag} ns from the broadcast decision");
+    }
+}
