@@ -1,5 +1,5 @@
 //! The command line: `dsmcosim validate FILE`, `dsmcosim run FILE --out DIR`,
-//! `dsmcosim check FILE --against DIR`.
+//! `dsmcosim check FILE --against DIR`, `dsmcosim sweep SWEEP --out DIR`, ….
 //!
 //! Exit codes: 0 success, 1 I/O failure, 2 bad input (scenario or arguments),
 //! 3 a run that diverged or failed numerically, 4 `check` found a difference.
@@ -122,6 +122,43 @@ pub enum Command {
         #[arg(long, value_name = "S")]
         duration: Option<f64>,
     },
+    /// What-if sweep: run a base scenario with fields set from the axes of a sweep file,
+    /// one run per point, in parallel.
+    ///
+    /// Writes DIR/sweep.json (a copy of the sweep file), DIR/points/pI/ for point I (its
+    /// scenario.json, run outputs and done.json), DIR/sweep.csv (one row per point),
+    /// DIR/timing.csv (wall time per point), cost_vs_AXIS.svg and cost_heatmap.svg.
+    /// Every point is validated before any runs. Exit codes: 0 done (diverged points
+    /// are rows), 1 unreadable file or I/O failure, 2 bad sweep file, point, --shard, or
+    /// a DIR that already holds a sweep without --resume (nothing written).
+    Sweep {
+        /// Sweep file (JSON).
+        sweep: PathBuf,
+        /// Output directory (created if missing).
+        #[arg(long, value_name = "DIR")]
+        out: PathBuf,
+        /// Continue the sweep in DIR: skip points whose done.json records the same point
+        /// (axis values, seed, scenario), rerun the rest.
+        #[arg(long)]
+        resume: bool,
+        /// Run only the points k with k mod n = i − 1 (1 ≤ i ≤ n); join the shards'
+        /// directories with `dsmcosim sweep-merge`.
+        #[arg(long, value_name = "i/n")]
+        shard: Option<String>,
+    },
+    /// Join the output directories of a sharded sweep into OUT: checks that they hold
+    /// the same sweep and every point exactly once, then writes sweep.csv, timing.csv
+    /// and the plots as an unsharded run does.
+    ///
+    /// Exit codes: 0 done, 1 I/O failure, 2 different sweeps, a point missing or done
+    /// twice, or a directory that is not a sweep's.
+    SweepMerge {
+        /// Output directory (created if missing).
+        out: PathBuf,
+        /// The shards' output directories (`dsmcosim sweep --shard i/n --out DIR`).
+        #[arg(required = true, value_name = "SHARD_DIR")]
+        shards: Vec<PathBuf>,
+    },
 }
 
 /// Entry point of the binary.
@@ -224,5 +261,40 @@ pub fn execute(command: Command) -> crate::Result<()> {
             out,
             duration,
         } => crate::tradeoff::command_stability_map(&scenario, &out, duration),
+        Command::Sweep {
+            sweep,
+            out,
+            resume,
+            shard,
+        } => {
+            let shard = shard
+                .as_deref()
+                .map(crate::sweep::Shard::parse)
+                .transpose()?;
+            let r = crate::sweep::run(&sweep, &out, &crate::sweep::Options { resume, shard })?;
+            say!(
+                "{}: {} of {} points ({} run, {} already done), {} diverged",
+                r.name,
+                r.selected,
+                r.points,
+                r.ran,
+                r.skipped,
+                r.diverged
+            );
+            say!("wrote {}", out.join("sweep.csv").display());
+            Ok(())
+        }
+        Command::SweepMerge { out, shards } => {
+            let r = crate::sweep::merge(&out, &shards)?;
+            say!(
+                "{}: merged {} points from {} directories, {} diverged",
+                r.name,
+                r.points,
+                shards.len(),
+                r.diverged
+            );
+            say!("wrote {}", out.join("sweep.csv").display());
+            Ok(())
+        }
     }
 }

@@ -1,0 +1,274 @@
+//! Running a sweep: checking every point, then running the selected ones in parallel,
+//! each into its own directory, skipping those a previous run finished (`--resume`).
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Mutex;
+use std::time::Instant;
+
+use rayon::prelude::*;
+use serde_json::Value;
+
+use super::file;
+use super::points::{expand, plan, Plan, Point};
+use super::record::{point_dir, Record, Row, DONE};
+use crate::error::{Error, Result};
+use crate::output::{create_dir_all, write_atomic};
+use crate::progress::Progress;
+
+/// Which share of the points one invocation runs: `--shard i/n` runs the points whose
+/// index `k` has `k mod n = i − 1`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shard {
+    /// 1-based shard number `i`, `1 ≤ i ≤ n`.
+    pub index: usize,
+    /// Number of shards `n`, ≥ 1.
+    pub count: usize,
+}
+
+impl Shard {
+    /// Parses `i/n`; errors name `--shard`.
+    pub fn parse(text: &str) -> Result<Shard> {
+        let bad = || {
+            Error::invalid(
+                "--shard",
+                format!("must be i/n with 1 ≤ i ≤ n, e.g. 2/8 (got {text:?})"),
+            )
+        };
+        let (i, n) = text.split_once('/').ok_or_else(bad)?;
+        let index: usize = i.trim().parse().map_err(|_| bad())?;
+        let count: usize = n.trim().parse().map_err(|_| bad())?;
+        if index < 1 || index > count {
+            return Err(bad());
+        }
+        Ok(Shard { index, count })
+    }
+
+    /// Whether point `k` belongs to this shard.
+    pub fn contains(&self, k: usize) -> bool {
+        k % self.count == self.index - 1
+    }
+}
+
+/// Options of `dsmcosim sweep`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Options {
+    /// Continue a sweep in the output directory: skip points whose `done.json` records
+    /// the same point definition.
+    pub resume: bool,
+    /// Run only this shard's points.
+    pub shard: Option<Shard>,
+}
+
+/// What a sweep did.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Report {
+    /// Sweep name.
+    pub name: String,
+    /// Points of the whole sweep.
+    pub points: usize,
+    /// Points of this invocation (this shard's, or all).
+    pub selected: usize,
+    /// Points run now.
+    pub ran: usize,
+    /// Points skipped because an earlier run finished them (`--resume`).
+    pub skipped: usize,
+    /// Selected points whose run diverged.
+    pub diverged: usize,
+}
+
+/// The checked sweep: plan, points, base digest, definition text.
+struct Loaded {
+    plan: Plan,
+    points: Vec<Point>,
+    base_digest: String,
+    text: String,
+}
+
+/// Reads the sweep file and its base, and checks every point.
+fn load(sweep_path: &Path) -> Result<Loaded> {
+    let (file, text) = file::load(sweep_path)?;
+    let plan = plan(&file)?;
+    let base_path: PathBuf = match sweep_path.parent() {
+        Some(dir) => dir.join(&file.base),
+        None => PathBuf::from(&file.base),
+    };
+    let bytes = std::fs::read(&base_path).map_err(|e| Error::io(&base_path, e))?;
+    let label = base_path.display().to_string();
+    let base: Value = serde_json::from_slice(&bytes).map_err(|e| Error::Parse {
+        file: label.clone(),
+        message: e.to_string(),
+        line: e.line(),
+        column: e.column().max(1),
+    })?;
+    let points = expand(&plan, &base, &label)?;
+    Ok(Loaded {
+        plan,
+        points,
+        base_digest: blake3::hash(&bytes).to_hex().to_string(),
+        text,
+    })
+}
+
+/// Runs the sweep defined in `sweep_path` into `out`; see the module docs of
+/// [`crate::sweep`].
+///
+/// Every point is built and validated first; a bad sweep or point is an
+/// [`Error::Invalid`] and nothing is written. A point whose run diverges is a row with
+/// status `diverged`. Points run in parallel on rayon's pool; the first failure (in
+/// index order) of a point that could not run is the error, after every other point
+/// has finished and written its `done.json`.
+pub fn run(sweep_path: &Path, out: &Path, options: &Options) -> Result<Report> {
+    let loaded = load(sweep_path)?;
+    if !options.resume && (out.join("sweep.json").exists() || out.join("points").exists()) {
+        return Err(Error::invalid(
+            "--out",
+            format!(
+                "{} already holds a sweep; pass --resume to continue it (finished points are kept), or choose another directory",
+                out.display()
+            ),
+        ));
+    }
+    create_dir_all(&out.join("points"))?;
+    write_atomic(&out.join("sweep.json"), loaded.text.as_bytes())?;
+    let selected: Vec<&Point> = loaded
+        .points
+        .iter()
+        .filter(|p| options.shard.is_none_or(|s| s.contains(p.index)))
+        .collect();
+    let mut to_run = Vec::new();
+    for p in &selected {
+        let dir = point_dir(out, p.index);
+        if options.resume {
+            if let Ok(Some(done)) = Record::read(&dir) {
+                if done.same_point(&expected(p, &loaded.base_digest)) {
+                    continue;
+                }
+            }
+        }
+        // A stale marker must not survive a rerun that fails half-way.
+        match std::fs::remove_file(dir.join(DONE)) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(Error::io(dir.join(DONE), e))
+            }
+            _ => {}
+        }
+        to_run.push(*p);
+    }
+    let progress = Mutex::new(Progress::with_unit(to_run.len() as u64, "points"));
+    let finished = AtomicU64::new(0);
+    let results: Vec<Result<()>> = to_run
+        .par_iter()
+        .map(|p| {
+            let r = run_point(out, &loaded, p);
+            let n = finished.fetch_add(1, Ordering::Relaxed) + 1;
+            if let Ok(mut bar) = progress.lock() {
+                bar.tick(n);
+            }
+            r
+        })
+        .collect();
+    if let Ok(bar) = progress.lock() {
+        bar.finish();
+    }
+    results.into_iter().collect::<Result<Vec<()>>>()?;
+    let records = selected
+        .iter()
+        .map(|p| {
+            let dir = point_dir(out, p.index);
+            Record::read(&dir)?.ok_or_else(|| {
+                Error::io(
+                    dir.join(DONE),
+                    std::io::Error::new(std::io::ErrorKind::NotFound, "point did not finish"),
+                )
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    super::write_outputs(out, &loaded.plan, &records)?;
+    Ok(Report {
+        name: loaded.plan.name.clone(),
+        points: loaded.points.len(),
+        selected: selected.len(),
+        ran: to_run.len(),
+        skipped: selected.len() - to_run.len(),
+        diverged: records.iter().filter(|r| r.row.status != "ok").count(),
+    })
+}
+
+/// The record point `p` will get, without its measurements (for matching).
+fn expected(p: &Point, base_digest: &str) -> Record {
+    Record {
+        index: p.index,
+        values: p.values.clone(),
+        seed: p.seed,
+        scenario_digest: p.digest.clone(),
+        base_digest: base_digest.to_string(),
+        row: Row {
+            status: String::new(),
+            mean_cost: None,
+            mean_cost_by_method: Default::default(),
+            lost_frames: 0,
+            channels: Vec::new(),
+            bandwidth: None,
+            digest: String::new(),
+        },
+        wall_seconds: 0.0,
+    }
+}
+
+/// Runs point `p` into `out/points/p<index>/`: `scenario.json`, the run's outputs,
+/// then `done.json`.
+fn run_point(out: &Path, loaded: &Loaded, p: &Point) -> Result<()> {
+    let dir = point_dir(out, p.index);
+    create_dir_all(&dir)?;
+    write_atomic(&dir.join("scenario.json"), p.text.as_bytes())?;
+    let label = format!("{}_p{}", loaded.plan.name, p.index);
+    let scenario = crate::scenario::parse_str(&p.text, &label)?;
+    let started = Instant::now();
+    match crate::run::run(&scenario, &dir) {
+        Ok(_) | Err(Error::Diverged(_) | Error::Numerical { .. }) => {}
+        Err(Error::Invalid { path, message }) => {
+            return Err(Error::invalid(
+                format!(
+                    "point p{} ({}): {path}",
+                    p.index,
+                    loaded.plan.describe(p.index)
+                ),
+                message,
+            ))
+        }
+        Err(e) => return Err(e),
+    }
+    let wall_seconds = started.elapsed().as_secs_f64();
+    let summary_path = dir.join("summary.json");
+    let text = std::fs::read_to_string(&summary_path).map_err(|e| Error::io(&summary_path, e))?;
+    let summary: Value = serde_json::from_str(&text).map_err(|e| {
+        Error::invalid(
+            summary_path.display().to_string(),
+            format!("not a run summary: {e}"),
+        )
+    })?;
+    let record = Record {
+        row: Row::from_summary(&summary, &summary_path)?,
+        wall_seconds,
+        ..expected(p, &loaded.base_digest)
+    };
+    record.write(&dir)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shards_split_by_index() {
+        let s = Shard::parse("2/3").unwrap();
+        let mine: Vec<usize> = (0..8).filter(|&k| s.contains(k)).collect();
+        assert_eq!(mine, vec![1, 4, 7]);
+        for bad in ["0/2", "3/2", "1", "a/2", "1/0", "-1/2"] {
+            let e = Shard::parse(bad).unwrap_err();
+            assert!(e.to_string().starts_with("--shard:"), "{bad}: {e}");
+            assert_eq!(e.exit_code(), 2);
+        }
+    }
+}

@@ -1,0 +1,203 @@
+//! Plots of a sweep: `cost_vs_<axis>.svg` (mean cost against the first numeric axis,
+//! one line per combination of the other axes' values under `factorial`) and, with two
+//! or more axes, `cost_heatmap.svg` (mean cost over the first two axes; cells holding
+//! several points, under three or more axes, show their mean).
+//!
+//! An axis whose values are not all numbers is drawn at the index of each value, and
+//! its label says so.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use super::file::Combine;
+use super::points::{Axis, Plan};
+use super::record::Record;
+use crate::error::Result;
+use crate::report::{write_heatmap, write_line_plot, Heatmap, LinePlot, Series};
+
+/// Label of the mean cost.
+const COST: &str = "mean cost C [m]";
+
+/// The unit of a scenario field, from the pointer's last token (and its first, where
+/// the last alone is ambiguous); `None` where not known.
+fn unit(axis: &Axis) -> Option<&'static str> {
+    let tokens = axis.pointer.tokens();
+    let first = tokens.first().map(String::as_str);
+    let last = tokens.last().map(String::as_str)?;
+    Some(match (first, last) {
+        (Some("stabilizer"), "k") => "m/s",
+        (Some("stabilizer"), "epsilon") => "m",
+        (Some("stabilizer"), "alpha" | "beta") => "1/s",
+        (Some("model"), "size" | "spacing") => "m",
+        (Some("model"), "mass") => "kg",
+        (Some("controller"), "size") => "s",
+        (_, "duration" | "dt" | "tau" | "latency" | "period" | "offset" | "mu") => "s",
+        (_, "slot" | "cycle" | "guard" | "propagation" | "sync_error" | "mean" | "max") => "s",
+        (_, "tau_min" | "tau_max" | "grid_step" | "dsm_delta" | "surface_window") => "s",
+        (_, "from" | "until" | "t0" | "t1" | "decision_time") => "s",
+        (_, "drift_ppm") => "ppm",
+        (_, "random_walk_ppm") => "ppm/√s",
+        (_, "link_rate") => "bit/s",
+        (_, "header_bytes") => "B",
+        (_, "budget") => "1/s",
+        (_, "penalty") => "m·s",
+        (_, "omega") => "rad/s",
+        (_, "max_violation") => "m",
+        _ => return None,
+    })
+}
+
+/// Coordinates of an axis's values and its label: the numbers themselves, or the
+/// value indices for an axis with a non-numeric value.
+fn coordinates(axis: &Axis) -> (Vec<f64>, String) {
+    match axis.numbers() {
+        Some(x) => {
+            let label = match unit(axis) {
+                Some(u) => format!("{} [{u}]", axis.name),
+                None => axis.name.clone(),
+            };
+            (x, label)
+        }
+        None => (
+            (0..axis.values.len()).map(|i| i as f64).collect(),
+            format!("{} (index of the value; values are not numbers)", axis.name),
+        ),
+    }
+}
+
+/// Mean cost of a record, NaN if none.
+fn cost(r: &Record) -> f64 {
+    r.row.mean_cost.unwrap_or(f64::NAN)
+}
+
+/// Writes the plots of `records` (sorted by index) into `out`.
+pub fn write(out: &Path, plan: &Plan, records: &[Record]) -> Result<()> {
+    cost_vs(out, plan, records)?;
+    if plan.axes.len() >= 2 {
+        heatmap(out, plan, records)?;
+    }
+    Ok(())
+}
+
+/// `cost_vs_<axis>.svg`.
+fn cost_vs(out: &Path, plan: &Plan, records: &[Record]) -> Result<()> {
+    let xa = plan
+        .axes
+        .iter()
+        .position(|a| a.numbers().is_some())
+        .unwrap_or(0);
+    let (x, x_label) = coordinates(&plan.axes[xa]);
+    let others: Vec<usize> = (0..plan.axes.len()).filter(|&k| k != xa).collect();
+    let grouped = plan.combine == Combine::Factorial && !others.is_empty();
+    // Lines keyed by the other axes' value indices, so they come in axis order.
+    let mut lines: BTreeMap<Vec<usize>, Vec<(f64, f64)>> = BTreeMap::new();
+    for r in records {
+        let idx = &plan.points[r.index];
+        let key = if grouped {
+            others.iter().map(|&k| idx[k]).collect()
+        } else {
+            Vec::new()
+        };
+        lines.entry(key).or_default().push((x[idx[xa]], cost(r)));
+    }
+    let series: Vec<Series> = lines
+        .into_iter()
+        .map(|(key, mut points)| {
+            points.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let label = if grouped {
+                others
+                    .iter()
+                    .zip(&key)
+                    .map(|(&k, &v)| format!("{} = {}", plan.axes[k].name, plan.axes[k].values[v]))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            } else {
+                "mean cost".to_string()
+            };
+            Series::new(label, points)
+        })
+        .collect();
+    let name = &plan.axes[xa].name;
+    let title = format!("{} — mean cost vs {name}", plan.name);
+    write_line_plot(
+        &out.join(format!("cost_vs_{name}.svg")),
+        &LinePlot {
+            markers: true,
+            ..LinePlot::new(&title, &x_label, COST, &series)
+        },
+    )
+}
+
+/// Cell centres (sorted distinct coordinates) and, per value index, its cell.
+fn cells(coords: &[f64]) -> (Vec<f64>, Vec<usize>) {
+    let mut centres = coords.to_vec();
+    centres.sort_by(f64::total_cmp);
+    centres.dedup();
+    let cell = coords
+        .iter()
+        .map(|c| centres.partition_point(|x| x < c))
+        .collect();
+    (centres, cell)
+}
+
+/// `cost_heatmap.svg` over the first two axes.
+fn heatmap(out: &Path, plan: &Plan, records: &[Record]) -> Result<()> {
+    let (xs, x_label) = coordinates(&plan.axes[0]);
+    let (ys, y_label) = coordinates(&plan.axes[1]);
+    let (x, x_cell) = cells(&xs);
+    let (y, y_cell) = cells(&ys);
+    let mut sums = vec![vec![(0.0, 0usize); x.len()]; y.len()];
+    let mut shared = false;
+    for r in records {
+        let idx = &plan.points[r.index];
+        let c = cost(r);
+        if c.is_finite() {
+            let cell = &mut sums[y_cell[idx[1]]][x_cell[idx[0]]];
+            shared |= cell.1 > 0;
+            cell.0 += c;
+            cell.1 += 1;
+        }
+    }
+    let values: Vec<Vec<f64>> = sums
+        .iter()
+        .map(|row| {
+            row.iter()
+                .map(|&(s, n)| if n == 0 { f64::NAN } else { s / n as f64 })
+                .collect()
+        })
+        .collect();
+    let mut title = format!("{} — mean cost", plan.name);
+    if shared {
+        let rest: Vec<&str> = plan.axes[2..].iter().map(|a| a.name.as_str()).collect();
+        if rest.is_empty() {
+            title.push_str(" (mean over points with equal values)");
+        } else {
+            title.push_str(&format!(" (mean over {})", rest.join(", ")));
+        }
+    }
+    write_heatmap(
+        &out.join("cost_heatmap.svg"),
+        &Heatmap {
+            title: &title,
+            x_label: &x_label,
+            y_label: &y_label,
+            value_label: COST,
+            x: &x,
+            y: &y,
+            values: &values,
+            path_overlay: &[],
+        },
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cells_sort_and_merge_equal_coordinates() {
+        let (c, cell) = cells(&[2.0, 0.5, 2.0, 1.0]);
+        assert_eq!(c, vec![0.5, 1.0, 2.0]);
+        assert_eq!(cell, vec![2, 0, 2, 1]);
+    }
+}

@@ -1,0 +1,515 @@
+//! From a sweep file to its points: checking the definition ([`plan`], which needs no
+//! base scenario, so `sweep-merge` can use it), then building and validating every
+//! point's scenario ([`expand`]).
+
+use rayon::prelude::*;
+use serde_json::Value;
+
+use super::file::{AxisFile, Combine, SweepFile};
+use super::pointer::Pointer;
+use crate::error::{Error, Result};
+
+/// CSV columns an axis may not be named (nor start with `mean_cost_` or `tau_`).
+const RESERVED: [&str; 7] = [
+    "index",
+    "seed",
+    "status",
+    "mean_cost",
+    "lost_frames",
+    "bandwidth",
+    "digest",
+];
+
+/// One checked axis.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Axis {
+    /// Column name.
+    pub name: String,
+    /// Where its values go.
+    pub pointer: Pointer,
+    /// Its values, in file order (a range already expanded).
+    pub values: Vec<Value>,
+}
+
+impl Axis {
+    /// The values as numbers, if every one is a number.
+    pub fn numbers(&self) -> Option<Vec<f64>> {
+        self.values.iter().map(Value::as_f64).collect()
+    }
+}
+
+/// A checked sweep definition: the axes and, per point, which value of each axis it
+/// takes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Plan {
+    /// Sweep name.
+    pub name: String,
+    /// How the axes combine.
+    pub combine: Combine,
+    /// The axes, in file order.
+    pub axes: Vec<Axis>,
+    /// Fixed values, in the pointers' sorted order.
+    pub overrides: Vec<(Pointer, Value)>,
+    /// `points[i][k]`: index into `axes[k].values` of point `i`.
+    pub points: Vec<Vec<usize>>,
+}
+
+impl Plan {
+    /// The axis values of point `i`, in axis order.
+    pub fn values(&self, i: usize) -> Vec<Value> {
+        self.points[i]
+            .iter()
+            .zip(&self.axes)
+            .map(|(&v, a)| a.values[v].clone())
+            .collect()
+    }
+
+    /// `name = value, …` of point `i`, for messages (values as compact JSON).
+    pub fn describe(&self, i: usize) -> String {
+        self.axes
+            .iter()
+            .zip(self.values(i))
+            .map(|(a, v)| format!("{} = {v}", a.name))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+}
+
+/// SplitMix64's output function (Steele, Lea, Flood 2014): a bijection of `u64` whose
+/// outputs for consecutive inputs are statistically independent.
+pub fn splitmix64(x: u64) -> u64 {
+    let mut z = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// Seed of point `index` of a sweep over a base scenario with seed `base`:
+/// `splitmix64(base ^ splitmix64(index))`.
+pub fn derive_seed(base: u64, index: u64) -> u64 {
+    splitmix64(base ^ splitmix64(index))
+}
+
+/// The values of a range: `from + i·(to − from)/(steps − 1)` for `i < steps − 1`, and
+/// `to` itself last, so both ends are exact.
+fn range_values(from: f64, to: f64, steps: usize) -> Vec<f64> {
+    if steps == 1 {
+        return vec![from];
+    }
+    let last = steps - 1;
+    (0..steps)
+        .map(|i| {
+            if i == last {
+                to
+            } else {
+                from + i as f64 * (to - from) / last as f64
+            }
+        })
+        .collect()
+}
+
+/// Checks axis `k` and expands its values.
+fn axis(k: usize, a: &AxisFile, earlier: &[Axis]) -> Result<Axis> {
+    let at = |field: &str| format!("axes[{k}].{field}");
+    let ok_name = !a.name.is_empty()
+        && a.name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '.' | '-'));
+    if !ok_name {
+        return Err(Error::invalid(
+            at("name"),
+            format!("must be non-empty [A-Za-z0-9_.-] (got {:?})", a.name),
+        ));
+    }
+    if RESERVED.contains(&a.name.as_str())
+        || a.name.starts_with("mean_cost_")
+        || a.name.starts_with("tau_")
+    {
+        return Err(Error::invalid(
+            at("name"),
+            format!("`{}` is a column sweep.csv already has", a.name),
+        ));
+    }
+    if let Some(j) = earlier.iter().position(|b| b.name == a.name) {
+        return Err(Error::invalid(
+            at("name"),
+            format!("`{}` is already the name of axes[{j}]", a.name),
+        ));
+    }
+    let pointer = Pointer::parse(&a.pointer).map_err(|m| Error::invalid(at("pointer"), m))?;
+    if pointer.tokens()[0] == "name" {
+        return Err(Error::invalid(
+            at("pointer"),
+            format!("{pointer}: the sweep sets /name itself (to <sweep name>_p<index>)"),
+        ));
+    }
+    if let Some(j) = earlier.iter().position(|b| b.pointer == pointer) {
+        return Err(Error::invalid(
+            at("pointer"),
+            format!(
+                "{pointer} is already swept by axes[{j}] ({})",
+                earlier[j].name
+            ),
+        ));
+    }
+    let values = match (&a.values, &a.range) {
+        (Some(_), Some(_)) => {
+            return Err(Error::invalid(
+                format!("axes[{k}]"),
+                "give either values or range, not both",
+            ))
+        }
+        (None, None) => {
+            return Err(Error::invalid(
+                format!("axes[{k}]"),
+                "needs values or range",
+            ))
+        }
+        (Some(v), None) if v.is_empty() => {
+            return Err(Error::invalid(
+                at("values"),
+                format!("axis `{}` is empty (no values)", a.name),
+            ))
+        }
+        (Some(v), None) => v.clone(),
+        (None, Some(r)) => {
+            if r.steps < 1 {
+                return Err(Error::invalid(
+                    at("range.steps"),
+                    format!("axis `{}` needs steps ≥ 1 (got {})", a.name, r.steps),
+                ));
+            }
+            let steps = usize::try_from(r.steps).map_err(|_| {
+                Error::invalid(at("range.steps"), format!("too many steps ({})", r.steps))
+            })?;
+            range_values(r.from, r.to, steps)
+                .into_iter()
+                .map(|x| {
+                    serde_json::Number::from_f64(x)
+                        .map(Value::Number)
+                        .ok_or_else(|| {
+                            Error::invalid(
+                                at("range"),
+                                format!("axis `{}` gives a non-finite value", a.name),
+                            )
+                        })
+                })
+                .collect::<Result<_>>()?
+        }
+    };
+    Ok(Axis {
+        name: a.name.clone(),
+        pointer,
+        values,
+    })
+}
+
+/// Checks a sweep file and lists its points, without reading the base scenario.
+///
+/// Errors name the field: `name`, `axes[1].pointer`, `axes[0].values` (empty axis),
+/// `axes[2].range.steps`, `axes` (zero points; unequal lengths under `zip`),
+/// `overrides./x`.
+pub fn plan(file: &SweepFile) -> Result<Plan> {
+    if file.name.trim().is_empty() || file.name.chars().any(char::is_control) {
+        return Err(Error::invalid(
+            "name",
+            format!("must be a non-empty line of text (got {:?})", file.name),
+        ));
+    }
+    if file.base.is_empty() {
+        return Err(Error::invalid("base", "must name the base scenario file"));
+    }
+    let mut axes: Vec<Axis> = Vec::with_capacity(file.axes.len());
+    for (k, a) in file.axes.iter().enumerate() {
+        let checked = axis(k, a, &axes)?;
+        axes.push(checked);
+    }
+    if axes.is_empty() {
+        return Err(Error::invalid(
+            "axes",
+            "the sweep has zero points: it needs at least one axis",
+        ));
+    }
+    let mut overrides = Vec::with_capacity(file.overrides.len());
+    for (text, value) in &file.overrides {
+        let at = format!("overrides.{text}");
+        let pointer = Pointer::parse(text).map_err(|m| Error::invalid(&at, m))?;
+        if pointer.tokens()[0] == "name" {
+            return Err(Error::invalid(
+                at,
+                "the sweep sets /name itself (to <sweep name>_p<index>)",
+            ));
+        }
+        overrides.push((pointer, value.clone()));
+    }
+    let lens: Vec<usize> = axes.iter().map(|a| a.values.len()).collect();
+    let points = match file.combine {
+        Combine::Zip => {
+            if let Some(k) = lens.iter().position(|&n| n != lens[0]) {
+                return Err(Error::invalid(
+                    format!("axes[{k}]"),
+                    format!(
+                        "zip needs axes of equal length: axes[0] ({}) has {} values, axes[{k}] ({}) has {}",
+                        axes[0].name, lens[0], axes[k].name, lens[k]
+                    ),
+                ));
+            }
+            (0..lens[0]).map(|i| vec![i; axes.len()]).collect()
+        }
+        Combine::Factorial => {
+            let total = lens
+                .iter()
+                .try_fold(1usize, |n, &m| n.checked_mul(m))
+                .ok_or_else(|| Error::invalid("axes", "too many points (overflow)"))?;
+            (0..total)
+                .map(|mut i| {
+                    let mut idx = vec![0; lens.len()];
+                    for (k, &n) in lens.iter().enumerate().rev() {
+                        idx[k] = i % n;
+                        i /= n;
+                    }
+                    idx
+                })
+                .collect()
+        }
+    };
+    Ok(Plan {
+        name: file.name.clone(),
+        combine: file.combine,
+        axes,
+        overrides,
+        points,
+    })
+}
+
+/// One point, checked: its scenario text parses and validates.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Point {
+    /// Index in the sweep.
+    pub index: usize,
+    /// Axis values, in axis order.
+    pub values: Vec<Value>,
+    /// The seed of its scenario.
+    pub seed: u64,
+    /// The scenario as JSON text (pretty, keys in the base's order).
+    pub text: String,
+    /// BLAKE3 of `text` (hex).
+    pub digest: String,
+}
+
+/// Builds the scenario of point `i` as JSON: the base, the overrides, `/seed`, the axes,
+/// `/name`. Returns it with the axes that created a key the base does not have.
+fn build(
+    plan: &Plan,
+    base: &Value,
+    base_seed: Option<u64>,
+    i: usize,
+) -> Result<(Value, Vec<usize>)> {
+    let mut doc = base.clone();
+    for (pointer, value) in &plan.overrides {
+        pointer
+            .set(&mut doc, value.clone())
+            .map_err(|m| Error::invalid(format!("overrides.{pointer}"), m))?;
+    }
+    if let Some(base_seed) = base_seed {
+        doc["seed"] = Value::from(derive_seed(base_seed, i as u64));
+    }
+    let mut created = Vec::new();
+    for (k, (axis, value)) in plan.axes.iter().zip(plan.values(i)).enumerate() {
+        let added = axis.pointer.set(&mut doc, value).map_err(|m| {
+            let at = if i == 0 {
+                String::new()
+            } else {
+                format!(" (at point p{i}: {})", plan.describe(i))
+            };
+            Error::invalid(format!("axes[{k}].pointer"), format!("{m}{at}"))
+        })?;
+        if added {
+            created.push(k);
+        }
+    }
+    doc["name"] = Value::from(format!("{}_p{i}", plan.name));
+    Ok((doc, created))
+}
+
+/// Builds and validates every point's scenario from `base` (the base scenario's JSON;
+/// `base_label` names it in messages).
+///
+/// Every point is checked before any is returned; the first failure (in index order) is
+/// the error, naming the axis (`axes[1].pointer: …`) or the point and its axis values
+/// (`point p3 (drift = 50, T = 0.5): dt: …`).
+pub fn expand(plan: &Plan, base: &Value, base_label: &str) -> Result<Vec<Point>> {
+    if !base.is_object() {
+        return Err(Error::invalid(
+            "base",
+            format!("{base_label} is not a JSON object"),
+        ));
+    }
+    let seed_swept = plan.axes.iter().any(|a| a.pointer.tokens() == ["seed"]);
+    let mut with_overrides = base.clone();
+    for (pointer, value) in &plan.overrides {
+        pointer
+            .set(&mut with_overrides, value.clone())
+            .map_err(|m| Error::invalid(format!("overrides.{pointer}"), m))?;
+    }
+    let base_seed = if seed_swept {
+        None
+    } else {
+        let seed = with_overrides.get("seed").and_then(Value::as_u64);
+        Some(seed.ok_or_else(|| {
+            Error::invalid(
+                "base",
+                format!(
+                    "{base_label}: seed must be an unsigned integer to derive the points' seeds (got {})",
+                    with_overrides.get("seed").map_or("nothing".to_string(), Value::to_string)
+                ),
+            )
+        })?)
+    };
+    let results: Vec<Result<Point>> = (0..plan.points.len())
+        .into_par_iter()
+        .map(|i| point(plan, base, base_seed, i))
+        .collect();
+    results.into_iter().collect()
+}
+
+/// Builds and validates point `i`.
+fn point(plan: &Plan, base: &Value, base_seed: Option<u64>, i: usize) -> Result<Point> {
+    let (doc, created) = build(plan, base, base_seed, i)?;
+    let mut text = serde_json::to_string_pretty(&doc)
+        .map_err(|e| Error::invalid(format!("point p{i}"), e.to_string()))?;
+    text.push('\n');
+    let scenario =
+        crate::scenario::parse_str(&text, &format!("{}_p{i}", plan.name)).map_err(|e| {
+            let note: String = created
+                .iter()
+                .map(|&k| {
+                    format!(
+                        "; axes[{k}].pointer {} adds a key the base scenario does not have",
+                        plan.axes[k].pointer
+                    )
+                })
+                .collect();
+            Error::invalid(
+                format!("point p{i} ({})", plan.describe(i)),
+                format!("{e}{note}"),
+            )
+        })?;
+    Ok(Point {
+        index: i,
+        values: plan.values(i),
+        seed: scenario.seed,
+        digest: blake3::hash(text.as_bytes()).to_hex().to_string(),
+        text,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sweep::file::parse;
+
+    fn plan_of(json: &str) -> Result<Plan> {
+        plan(&parse(json, "s.json").unwrap())
+    }
+
+    #[test]
+    fn factorial_varies_the_last_axis_fastest() {
+        let p = plan_of(
+            r#"{"name": "s", "base": "b", "axes": [
+                {"name": "a", "pointer": "/a", "values": [1, 2]},
+                {"name": "b", "pointer": "/b", "values": ["x", "y", "z"]}]}"#,
+        )
+        .unwrap();
+        assert_eq!(p.points.len(), 6);
+        assert_eq!(p.points[1], vec![0, 1]);
+        assert_eq!(p.points[3], vec![1, 0]);
+        assert_eq!(p.describe(5), "a = 2, b = \"z\"");
+    }
+
+    #[test]
+    fn zip_pairs_values_and_needs_equal_lengths() {
+        let p = plan_of(
+            r#"{"name": "s", "base": "b", "combine": "zip", "axes": [
+                {"name": "a", "pointer": "/a", "values": [1, 2]},
+                {"name": "b", "pointer": "/b", "range": {"from": 0, "to": 1, "steps": 2}}]}"#,
+        )
+        .unwrap();
+        assert_eq!(p.points, vec![vec![0, 0], vec![1, 1]]);
+        let e = plan_of(
+            r#"{"name": "s", "base": "b", "combine": "zip", "axes": [
+                {"name": "a", "pointer": "/a", "values": [1, 2]},
+                {"name": "b", "pointer": "/b", "values": [1, 2, 3]}]}"#,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.starts_with("axes[1]: zip needs axes of equal length"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn ranges_are_evenly_spaced_with_exact_ends() {
+        assert_eq!(range_values(0.5, 2.0, 4), vec![0.5, 1.0, 1.5, 2.0]);
+        assert_eq!(range_values(3.0, 9.0, 1), vec![3.0]);
+        let v = range_values(0.001, 0.007, 7);
+        assert_eq!((v[0], v[6]), (0.001, 0.007));
+        assert_eq!(v[3], 0.001 + 3.0 * (0.007 - 0.001) / 6.0);
+    }
+
+    #[test]
+    fn bad_axes_are_named() {
+        let cases = [
+            (
+                r#"{"name": "a", "pointer": "/a", "values": []}"#,
+                "axes[0].values: axis `a` is empty",
+            ),
+            (
+                r#"{"name": "a", "pointer": "/a", "range": {"from": 0, "to": 1, "steps": 0}}"#,
+                "axes[0].range.steps:",
+            ),
+            (
+                r#"{"name": "a", "pointer": "a", "values": [1]}"#,
+                "axes[0].pointer:",
+            ),
+            (
+                r#"{"name": "a", "pointer": "/name", "values": [1]}"#,
+                "axes[0].pointer:",
+            ),
+            (
+                r#"{"name": "seed", "pointer": "/a", "values": [1]}"#,
+                "axes[0].name:",
+            ),
+            (
+                r#"{"name": "a b", "pointer": "/a", "values": [1]}"#,
+                "axes[0].name:",
+            ),
+            (
+                r#"{"name": "a", "pointer": "/a"}"#,
+                "axes[0]: needs values or range",
+            ),
+        ];
+        for (axis, want) in cases {
+            let e = plan_of(&format!(
+                r#"{{"name": "s", "base": "b", "axes": [{axis}]}}"#
+            ))
+            .unwrap_err()
+            .to_string();
+            assert!(e.starts_with(want), "{axis}: {e}");
+        }
+        let e = plan_of(r#"{"name": "s", "base": "b", "axes": []}"#)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("zero points"), "{e}");
+    }
+
+    #[test]
+    fn seeds_are_distinct_and_fixed() {
+        // Reference values of SplitMix64 seeded with 0: its first output is
+        // splitmix64(0) = 0xE220A8397B1DCDAF.
+        assert_eq!(splitmix64(0), 0xE220_A839_7B1D_CDAF);
+        let seeds: std::collections::BTreeSet<u64> = (0..1000).map(|i| derive_seed(7, i)).collect();
+        assert_eq!(seeds.len(), 1000);
+    }
+}

@@ -1,0 +1,171 @@
+//! `sweep.csv` and `timing.csv` from the points' records.
+//!
+//! `sweep.csv` columns: `index`, one per axis, `seed`, `status`, `mean_cost`,
+//! `mean_cost_<method>` for every method any record has (sorted), `lost_frames`,
+//! `tau_<name>_requested,tau_<name>_achieved` for every channel any record has (in order
+//! of first appearance by index), `bandwidth`, `digest`. Numbers are in Rust's shortest
+//! round-trip form; a value a run did not produce is an empty field. Axis values are
+//! written as JSON: numbers as they are, anything else compact and CSV-quoted.
+//!
+//! Wall time is not in `sweep.csv` (which is a pure function of the sweep and the
+//! binary); it is in `timing.csv` (`index,wall_seconds`).
+
+use std::collections::BTreeSet;
+
+use serde_json::Value;
+
+use super::points::Plan;
+use super::record::Record;
+
+/// A number field: shortest round-trip form, empty for none.
+fn num(x: Option<f64>) -> String {
+    match x {
+        Some(x) if x.is_finite() => format!("{x}"),
+        _ => String::new(),
+    }
+}
+
+/// A CSV-quoted text field.
+fn quoted(s: &str) -> String {
+    format!("\"{}\"", s.replace('"', "\"\""))
+}
+
+/// An axis value field: a number as JSON, anything else as compact JSON, quoted.
+pub fn value_field(v: &Value) -> String {
+    match v {
+        Value::Number(n) => n.to_string(),
+        other => quoted(&other.to_string()),
+    }
+}
+
+/// A text field, quoted only if it needs to be.
+fn text(s: &str) -> String {
+    if s.contains([',', '"', '\n', '\r']) {
+        quoted(s)
+    } else {
+        s.to_string()
+    }
+}
+
+/// `sweep.csv` of `records` (sorted by index).
+pub fn sweep_csv(plan: &Plan, records: &[Record]) -> String {
+    let methods: BTreeSet<&str> = records
+        .iter()
+        .flat_map(|r| r.row.mean_cost_by_method.keys().map(String::as_str))
+        .collect();
+    let mut channels: Vec<&str> = Vec::new();
+    for r in records {
+        for c in &r.row.channels {
+            if !channels.contains(&c.name.as_str()) {
+                channels.push(&c.name);
+            }
+        }
+    }
+    let mut header = vec!["index".to_string()];
+    header.extend(plan.axes.iter().map(|a| a.name.clone()));
+    header.extend(["seed", "status", "mean_cost"].map(String::from));
+    header.extend(methods.iter().map(|m| format!("mean_cost_{m}")));
+    header.push("lost_frames".into());
+    for c in &channels {
+        header.push(format!("tau_{c}_requested"));
+        header.push(format!("tau_{c}_achieved"));
+    }
+    header.extend(["bandwidth", "digest"].map(String::from));
+    let mut s = header.iter().map(|h| text(h)).collect::<Vec<_>>().join(",");
+    s.push('\n');
+    for r in records {
+        let row = &r.row;
+        let mut f = vec![r.index.to_string()];
+        f.extend(r.values.iter().map(value_field));
+        f.push(r.seed.to_string());
+        f.push(text(&row.status));
+        f.push(num(row.mean_cost));
+        f.extend(
+            methods
+                .iter()
+                .map(|m| num(row.mean_cost_by_method.get(*m).copied().flatten())),
+        );
+        f.push(row.lost_frames.to_string());
+        for name in &channels {
+            let c = row.channels.iter().find(|c| c.name == *name);
+            f.push(num(c.and_then(|c| c.tau_requested)));
+            f.push(num(c.and_then(|c| c.tau_achieved)));
+        }
+        f.push(num(row.bandwidth));
+        f.push(text(&row.digest));
+        s.push_str(&f.join(","));
+        s.push('\n');
+    }
+    s
+}
+
+/// `timing.csv`: `index,wall_seconds` per record.
+pub fn timing_csv(records: &[Record]) -> String {
+    let mut s = String::from("index,wall_seconds\n");
+    for r in records {
+        s.push_str(&format!("{},{}\n", r.index, num(Some(r.wall_seconds))));
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sweep::file::parse;
+    use crate::sweep::points::plan;
+    use crate::sweep::record::{ChannelRow, Row};
+    use serde_json::json;
+    use std::collections::BTreeMap;
+
+    fn record(index: usize, values: Vec<Value>, methods: &[(&str, f64)], channel: &str) -> Record {
+        Record {
+            index,
+            values,
+            seed: 10 + index as u64,
+            scenario_digest: "s".into(),
+            base_digest: "b".into(),
+            row: Row {
+                status: "ok".into(),
+                mean_cost: Some(0.5),
+                mean_cost_by_method: methods
+                    .iter()
+                    .map(|&(m, c)| (m.to_string(), Some(c)))
+                    .collect::<BTreeMap<_, _>>(),
+                lost_frames: 0,
+                channels: vec![ChannelRow {
+                    name: channel.into(),
+                    tau_requested: Some(0.005),
+                    tau_achieved: None,
+                }],
+                bandwidth: Some(400.0),
+                digest: "d".into(),
+            },
+            wall_seconds: 0.25,
+        }
+    }
+
+    #[test]
+    fn columns_are_the_union_and_values_are_quoted() {
+        let p = plan(
+            &parse(
+                r#"{"name": "s", "base": "b", "axes": [
+                {"name": "slots", "pointer": "/a", "values": [[1, 2], "x"]}]}"#,
+                "s",
+            )
+            .unwrap(),
+        )
+        .unwrap();
+        let rows = [
+            record(0, vec![json!([1, 2])], &[("grid", 0.25)], "c1"),
+            record(1, vec![json!("x")], &[("dsm", 0.125)], "c2"),
+        ];
+        assert_eq!(
+            sweep_csv(&p, &rows),
+            "index,slots,seed,status,mean_cost,mean_cost_dsm,mean_cost_grid,lost_frames,\
+             tau_c1_requested,tau_c1_achieved,tau_c2_requested,tau_c2_achieved,bandwidth,digest\n\
+             0,\"[1,2]\",10,ok,0.5,,0.25,0,0.005,,,,400,d\n\
+             1,\"\"\"x\"\"\",11,ok,0.5,0.125,,0,,,0.005,,400,d\n"
+        );
+        assert_eq!(timing_csv(&rows), "index,wall_seconds\n0,0.25\n1,0.25\n");
+    }
+}

@@ -1,0 +1,435 @@
+//! `dsmcosim sweep` and `dsmcosim sweep-merge`: output independent of the thread count,
+//! shards merged equal to the unsharded run, resume, bad sweep files, derived seeds.
+//!
+//! The base scenario is the thesis grid on 4 quadrant nodes (`grid16_space_fixed`) cut
+//! to 0.2 s, so every point runs in milliseconds.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use serde_json::{json, Value};
+
+/// A fresh empty directory under the system temp dir, unique per test and process.
+fn scratch(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("dsmcosim-sweep-{test}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Writes the short base scenario into `dir/base.json`.
+fn write_base(dir: &Path) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/grid16_space_fixed.json");
+    let mut base: Value = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    base["duration"] = json!(0.2);
+    base["measurement"]["period"] = json!(0.05);
+    base["output"]["decimation"] = json!(20);
+    std::fs::write(
+        dir.join("base.json"),
+        serde_json::to_string_pretty(&base).unwrap(),
+    )
+    .unwrap();
+}
+
+/// Writes `sweep` into `dir/<file>` beside a base scenario and returns its path.
+fn write_sweep(dir: &Path, file: &str, sweep: &Value) -> PathBuf {
+    write_base(dir);
+    let path = dir.join(file);
+    std::fs::write(&path, serde_json::to_string_pretty(sweep).unwrap()).unwrap();
+    path
+}
+
+/// Six points: two channel delays, factorial.
+fn two_taus() -> Value {
+    json!({
+        "name": "taus",
+        "base": "base.json",
+        "combine": "factorial",
+        "axes": [
+            {"name": "tau1", "pointer": "/channels/0/tau", "values": [0.001, 0.005, 0.01]},
+            {"name": "tau2", "pointer": "/channels/1/tau", "range": {"from": 0.002, "to": 0.004, "steps": 2}}
+        ]
+    })
+}
+
+fn dsmcosim(args: &[&Path]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_dsmcosim"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// Runs the CLI with string-ish arguments and asserts success.
+fn ok(args: &[&dyn AsRef<std::ffi::OsStr>]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_dsmcosim"))
+        .args(args.iter().map(|a| a.as_ref()))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "dsmcosim {:?} failed: {}",
+        args.iter().map(|a| a.as_ref()).collect::<Vec<_>>(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
+
+fn read(path: &Path) -> String {
+    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// The column `name` of a CSV text.
+fn column(csv: &str, name: &str) -> Vec<String> {
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let k = header.iter().position(|h| *h == name).unwrap();
+    lines
+        .map(|l| l.split(',').nth(k).unwrap().to_string())
+        .collect()
+}
+
+/// Same bytes of the files that must not depend on how the sweep was run.
+fn assert_same_outputs(a: &Path, b: &Path, what: &str) {
+    for file in [
+        "sweep.csv",
+        "cost_vs_tau1.svg",
+        "cost_heatmap.svg",
+        "sweep.json",
+    ] {
+        assert_eq!(
+            read(&a.join(file)),
+            read(&b.join(file)),
+            "{what}: {file} differs between {} and {}",
+            a.display(),
+            b.display()
+        );
+    }
+}
+
+#[test]
+fn two_threads_write_the_same_bytes_as_one() {
+    let dir = scratch("threads");
+    let sweep = write_sweep(&dir, "sweep.json", &two_taus());
+    let mut outs = Vec::new();
+    for threads in [1, 2] {
+        let out = dir.join(format!("out{threads}"));
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let report = pool
+            .install(|| dsmcosim::sweep::run(&sweep, &out, &dsmcosim::sweep::Options::default()))
+            .unwrap();
+        assert_eq!((report.points, report.ran, report.skipped), (6, 6, 0));
+        outs.push(out);
+    }
+    assert_same_outputs(&outs[0], &outs[1], "1 vs 2 threads");
+    let csv = read(&outs[0].join("sweep.csv"));
+    assert_eq!(
+        csv.lines().next().unwrap(),
+        "index,tau1,tau2,seed,status,mean_cost,lost_frames,tau_tau1_requested,tau_tau1_achieved,\
+         tau_tau2_requested,tau_tau2_achieved,bandwidth,digest"
+    );
+    assert_eq!(
+        column(&csv, "tau1"),
+        ["0.001", "0.001", "0.005", "0.005", "0.01", "0.01"]
+    );
+    assert_eq!(
+        column(&csv, "tau2"),
+        ["0.002", "0.004", "0.002", "0.004", "0.002", "0.004"]
+    );
+    assert_eq!(column(&csv, "tau_tau1_achieved")[2], "0.005");
+    assert_eq!(column(&csv, "status"), vec!["ok"; 6]);
+    // Different delays give different runs.
+    let digests: std::collections::BTreeSet<String> = column(&csv, "digest").into_iter().collect();
+    assert_eq!(digests.len(), 6);
+    // timing.csv has the wall time, sweep.csv does not.
+    let timing = read(&outs[0].join("timing.csv"));
+    assert!(timing.starts_with("index,wall_seconds\n0,"), "{timing}");
+    assert_eq!(timing.lines().count(), 7);
+    assert!(outs[0].join("points/p5/done.json").is_file());
+    assert!(outs[0].join("points/p5/scenario.json").is_file());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn sharded_and_merged_equals_unsharded() {
+    let dir = scratch("shards");
+    let sweep = write_sweep(&dir, "sweep.json", &two_taus());
+    let (full, s1, s2, merged) = (
+        dir.join("full"),
+        dir.join("s1"),
+        dir.join("s2"),
+        dir.join("merged"),
+    );
+    ok(&[&"sweep", &sweep, &"--out", &full]);
+    let said = ok(&[&"sweep", &sweep, &"--out", &s1, &"--shard", &"1/2"]);
+    assert!(
+        said.contains("3 of 6 points (3 run, 0 already done)"),
+        "{said}"
+    );
+    let shard1 = read(&s1.join("sweep.csv"));
+    assert_eq!(column(&shard1, "index"), ["0", "2", "4"]);
+
+    // One shard alone is not the whole sweep.
+    let out = dsmcosim(&[Path::new("sweep-merge"), &merged, &s1]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("3 of 6 points are not done") && err.contains("p1, p3, p5"),
+        "{err}"
+    );
+
+    ok(&[&"sweep", &sweep, &"--out", &s2, &"--shard", &"2/2"]);
+    let said = ok(&[&"sweep-merge", &merged, &s1, &s2]);
+    assert!(
+        said.contains("merged 6 points from 2 directories"),
+        "{said}"
+    );
+    assert_same_outputs(&full, &merged, "unsharded vs shards 1/2 + 2/2 merged");
+    assert_eq!(read(&merged.join("timing.csv")).lines().count(), 7);
+
+    // The same shard twice, and shards of another sweep, are refused.
+    let out = dsmcosim(&[Path::new("sweep-merge"), &dir.join("m2"), &s1, &s2, &full]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("done in two shard directories"), "{err}");
+    let mut other = two_taus();
+    other["axes"][0]["values"] = json!([0.001, 0.005, 0.02]);
+    let other_sweep = write_sweep(&dir, "other.json", &other);
+    let s2b = dir.join("s2b");
+    ok(&[&"sweep", &other_sweep, &"--out", &s2b, &"--shard", &"2/2"]);
+    let out = dsmcosim(&[Path::new("sweep-merge"), &dir.join("m3"), &s1, &s2b]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("shards of different sweeps"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn resume_reruns_only_unfinished_points() {
+    let dir = scratch("resume");
+    let sweep = write_sweep(&dir, "sweep.json", &two_taus());
+    let out = dir.join("out");
+    ok(&[&"sweep", &sweep, &"--out", &out]);
+    let csv = read(&out.join("sweep.csv"));
+    let summary = |i: usize| out.join(format!("points/p{i}/summary.json"));
+    let mtime = |i: usize| std::fs::metadata(summary(i)).unwrap().modified().unwrap();
+    let before: Vec<_> = (0..6).map(mtime).collect();
+
+    // An interrupted sweep: two points never finished, the tables never written.
+    std::fs::remove_file(out.join("points/p1/done.json")).unwrap();
+    std::fs::remove_file(out.join("points/p4/done.json")).unwrap();
+    std::fs::remove_file(out.join("sweep.csv")).unwrap();
+
+    // Without --resume the directory is refused, untouched.
+    let o = dsmcosim(&[Path::new("sweep"), &sweep, Path::new("--out"), &out]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("--resume"), "{err}");
+    assert!(!out.join("sweep.csv").exists());
+
+    std::thread::sleep(std::time::Duration::from_millis(20));
+    let said = ok(&[&"sweep", &sweep, &"--out", &out, &"--resume"]);
+    assert!(
+        said.contains("6 of 6 points (2 run, 4 already done)"),
+        "{said}"
+    );
+    assert_eq!(
+        read(&out.join("sweep.csv")),
+        csv,
+        "resumed sweep.csv differs"
+    );
+    for i in [0, 2, 3, 5] {
+        assert_eq!(mtime(i), before[i], "finished point p{i} was rerun");
+    }
+    for i in [1, 4] {
+        assert!(out.join(format!("points/p{i}/done.json")).is_file());
+    }
+
+    // A changed definition reruns exactly the points it changes (tau1 = 0.01 → 0.02:
+    // p4 and p5).
+    let mut changed = two_taus();
+    changed["axes"][0]["values"] = json!([0.001, 0.005, 0.02]);
+    let sweep2 = write_sweep(&dir, "sweep.json", &changed);
+    let said = ok(&[&"sweep", &sweep2, &"--out", &out, &"--resume"]);
+    assert!(said.contains("(2 run, 4 already done)"), "{said}");
+    let csv2 = read(&out.join("sweep.csv"));
+    assert_eq!(column(&csv2, "tau1")[5], "0.02");
+    assert_eq!(
+        csv2.lines().take(5).collect::<Vec<_>>(),
+        csv.lines().take(5).collect::<Vec<_>>()
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn bad_sweeps_exit_2_naming_the_axis_and_write_nothing() {
+    let dir = scratch("bad");
+    let axis = |name: &str, pointer: &str, values: Value| json!({"name": name, "pointer": pointer, "values": values});
+    let sweep = |axes: Value| json!({"name": "bad", "base": "base.json", "axes": axes});
+    let cases: Vec<(&str, Value, Vec<&str>)> = vec![
+        (
+            "unknown pointer",
+            sweep(json!([
+                axis("tau1", "/channels/0/tau", json!([0.001])),
+                axis("foo", "/network/foo/bar", json!([1]))
+            ])),
+            vec!["axes[1].pointer: /network/foo/bar: no key `foo` in /network"],
+        ),
+        (
+            "unknown top-level parent",
+            sweep(json!([axis("x", "/nosuch/x", json!([1]))])),
+            vec!["axes[0].pointer: /nosuch/x:"],
+        ),
+        (
+            "new key the scenario rejects",
+            sweep(json!([axis("foo", "/network/foo", json!([1]))])),
+            vec![
+                "point p0 (foo = 1)",
+                "unknown field `foo`",
+                "axes[0].pointer /network/foo",
+            ],
+        ),
+        (
+            "empty axis",
+            sweep(json!([axis("tau1", "/channels/0/tau", json!([]))])),
+            vec!["axes[0].values: axis `tau1` is empty"],
+        ),
+        (
+            "string for /dt",
+            sweep(json!([axis("step", "/dt", json!([0.001, "fast"]))])),
+            vec!["point p1 (step = \"fast\"): dt:", "string"],
+        ),
+        (
+            "zero points",
+            sweep(json!([])),
+            vec!["axes: the sweep has zero points"],
+        ),
+        (
+            "zip with unequal lengths",
+            json!({"name": "bad", "base": "base.json", "combine": "zip", "axes": [
+                axis("tau1", "/channels/0/tau", json!([0.001, 0.002])),
+                axis("tau2", "/channels/1/tau", json!([0.001]))]}),
+            vec!["axes[1]: zip needs axes of equal length", "tau1", "tau2"],
+        ),
+        (
+            "range with zero steps",
+            sweep(
+                json!([{"name": "tau1", "pointer": "/channels/0/tau", "range": {"from": 0.001, "to": 0.002, "steps": 0}}]),
+            ),
+            vec!["axes[0].range.steps: axis `tau1` needs steps ≥ 1"],
+        ),
+        (
+            "unknown key",
+            json!({"name": "bad", "base": "base.json", "axes": [axis("a", "/dt", json!([0.001]))], "axis": []}),
+            vec!["unknown field `axis`"],
+        ),
+        (
+            "a point that fails validation",
+            sweep(json!([axis(
+                "tau1",
+                "/channels/0/tau",
+                json!([0.001, 0.0015])
+            )])),
+            vec!["point p1 (tau1 = 0.0015): channels[0].tau"],
+        ),
+    ];
+    for (what, definition, wants) in cases {
+        let path = write_sweep(&dir, "sweep.json", &definition);
+        let out = dir.join("out");
+        let o = dsmcosim(&[Path::new("sweep"), &path, Path::new("--out"), &out]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{what}: {err}");
+        assert_eq!(err.lines().count(), 1, "{what}: one line expected: {err}");
+        for want in wants {
+            assert!(err.contains(want), "{what}: expected {want:?} in: {err}");
+        }
+        assert!(!out.exists(), "{what}: wrote {}", out.display());
+    }
+    let path = write_sweep(&dir, "sweep.json", &two_taus());
+    let o = dsmcosim(&[
+        Path::new("sweep"),
+        &path,
+        Path::new("--out"),
+        &dir.join("out"),
+        Path::new("--shard"),
+        Path::new("3/2"),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--shard"));
+    assert!(!dir.join("out").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn seeds_are_derived_per_point_and_reproducible() {
+    let dir = scratch("seeds");
+    let sweep = write_sweep(&dir, "sweep.json", &two_taus());
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    ok(&[&"sweep", &sweep, &"--out", &a]);
+    ok(&[&"sweep", &sweep, &"--out", &b]);
+    let csv = read(&a.join("sweep.csv"));
+    assert_eq!(csv, read(&b.join("sweep.csv")), "a second sweep differs");
+    let seeds: Vec<u64> = column(&csv, "seed")
+        .iter()
+        .map(|s| s.parse().unwrap())
+        .collect();
+    // The base's seed is 7.
+    let want: Vec<u64> = (0..6).map(|i| dsmcosim::sweep::derive_seed(7, i)).collect();
+    assert_eq!(seeds, want);
+    let distinct: std::collections::BTreeSet<u64> = seeds.iter().copied().collect();
+    assert_eq!(distinct.len(), 6);
+    let scenario: Value = serde_json::from_str(&read(&a.join("points/p3/scenario.json"))).unwrap();
+    assert_eq!(scenario["seed"], json!(want[3]));
+    assert_eq!(scenario["name"], json!("taus_p3"));
+    assert_eq!(scenario["channels"][0]["tau"], json!(0.005));
+
+    // An axis on /seed wins over the derived seed; string values are quoted JSON and
+    // drawn at their index.
+    let own = json!({
+        "name": "own", "base": "base.json", "combine": "zip",
+        "axes": [
+            {"name": "s", "pointer": "/seed", "values": [1, 2]},
+            {"name": "ghosts", "pointer": "/partition/ghosts", "values": ["integrate", "hold"]}
+        ]
+    });
+    let path = write_sweep(&dir, "own.json", &own);
+    let c = dir.join("c");
+    ok(&[&"sweep", &path, &"--out", &c]);
+    let csv = read(&c.join("sweep.csv"));
+    assert_eq!(column(&csv, "seed"), ["1", "2"]);
+    assert_eq!(
+        column(&csv, "ghosts"),
+        ["\"\"\"integrate\"\"\"", "\"\"\"hold\"\"\""]
+    );
+    let heatmap = read(&c.join("cost_heatmap.svg"));
+    assert!(
+        heatmap.contains("index of the value"),
+        "non-numeric axis label"
+    );
+    assert!(c.join("cost_vs_s.svg").is_file());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_diverged_point_is_a_row() {
+    let dir = scratch("diverged");
+    let sweep = json!({
+        "name": "gain", "base": "base.json",
+        "axes": [{"name": "K", "pointer": "/stabilizer/k", "values": [10.0, 10000.0]}]
+    });
+    let path = write_sweep(&dir, "sweep.json", &sweep);
+    let out = dir.join("out");
+    let said = ok(&[&"sweep", &path, &"--out", &out]);
+    assert!(said.contains("1 diverged"), "{said}");
+    let csv = read(&out.join("sweep.csv"));
+    assert_eq!(column(&csv, "status"), ["ok", "diverged"]);
+    let svg = read(&out.join("cost_vs_K.svg"));
+    assert!(svg.contains("K [m/s]") && svg.contains("mean cost C [m]"));
+    assert!(
+        !out.join("cost_heatmap.svg").exists(),
+        "one axis has no heatmap"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
