@@ -7,6 +7,19 @@ use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
+thread_local! {
+    static QUIET: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Runs `f` with every bar created on this thread inside it hidden (a sweep's points,
+/// whose own bars would draw over the sweep's).
+pub fn quietly<T>(f: impl FnOnce() -> T) -> T {
+    let before = QUIET.with(|q| q.replace(true));
+    let out = f();
+    QUIET.with(|q| q.set(before));
+    out
+}
+
 /// How long a run stays silent before its bar appears.
 pub const QUIET_FOR: Duration = Duration::from_secs(2);
 
@@ -38,7 +51,7 @@ impl Progress {
             bar,
             started: Instant::now(),
             shown: false,
-            enabled: std::io::stderr().is_terminal(),
+            enabled: std::io::stderr().is_terminal() && !QUIET.with(|q| q.get()),
         }
     }
 

@@ -225,7 +225,7 @@ fn run_point(out: &Path, loaded: &Loaded, p: &Point) -> Result<()> {
     let label = format!("{}_p{}", loaded.plan.name, p.index);
     let scenario = crate::scenario::parse_str(&p.text, &label)?;
     let started = Instant::now();
-    match crate::run::run(&scenario, &dir) {
+    match crate::progress::quietly(|| crate::run::run(&scenario, &dir)) {
         Ok(_) | Err(Error::Diverged(_) | Error::Numerical { .. }) => {}
         Err(Error::Invalid { path, message }) => {
             return Err(Error::invalid(
