@@ -17,6 +17,7 @@
 mod axis;
 mod heatmap;
 mod line;
+pub mod timeline;
 
 use std::path::Path;
 
@@ -26,6 +27,7 @@ use crate::error::Error;
 
 pub use heatmap::{heatmap_svg, write_heatmap, Heatmap};
 pub use line::{line_plot_svg, write_line_plot, LinePlot, Series};
+pub use timeline::{slot_timeline_svg, write_slot_timeline, SlotTimeline};
 
 /// How values are placed along an axis.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
