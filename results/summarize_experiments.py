@@ -6,7 +6,7 @@ import csv, json, os, sys
 
 root = sys.argv[1] if len(sys.argv) > 1 else os.path.dirname(os.path.abspath(__file__))
 names = ["grid16_space_cp", "grid16_space_cp_ds2", "grid16_space_cp_T10", "grid16_space_cp_ramp",
-         "grid16_space_up", "grid16_time_cp", "grid16_time_up"]
+         "grid16_space_up", "grid16_time_cp", "grid16_time_up", "tdma4_space_cp", "tdma16_space_cp"]
 
 def mean(xs):
     xs = [x for x in xs if x == x]

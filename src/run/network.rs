@@ -8,6 +8,7 @@ use serde_json::{json, Value};
 use crate::cosim::CoSim;
 use crate::error::Result;
 use crate::network::tdma::Jitter;
+use crate::report::timeline::{write_slot_timeline, SlotTimeline};
 use crate::report::{write_line_plot, LinePlot, Scale, Series};
 use crate::trace::Recorder;
 
@@ -80,7 +81,24 @@ pub(super) fn write_plots(out: &Path, world: &CoSim, rec: &Recorder) -> Result<(
         .iter()
         .map(|c| c.spec.name.clone())
         .collect();
-    let _ = (log, &names);
+    let cycles = log.timeline();
+    if !cycles.is_empty() {
+        let first = cycles[0].cycle;
+        let title = format!(
+            "{name} — TDMA slot timeline, cycles {first}–{}",
+            first + cycles.len() as u64 - 1
+        );
+        write_slot_timeline(
+            &out.join("timeline.svg"),
+            &SlotTimeline {
+                title: &title,
+                layout: link.network().layout(),
+                guard: link.network().config().guard,
+                cycles,
+                channel_names: &names,
+            },
+        )?;
+    }
     let switches = link.switches();
     if switches.is_empty() {
         return Ok(());

@@ -267,3 +267,49 @@ fn every_subcommand_has_help() {
         assert!(String::from_utf8_lossy(&o.stdout).contains("Usage"));
     }
 }
+
+#[test]
+fn a_tdma_run_writes_the_network_outputs() {
+    let dir = scratch("tdma_outputs");
+    let text = std::fs::read_to_string(repo().join("scenarios/tdma4_space_fixed.json"))
+        .expect("shipped scenario");
+    let mut v: Value = serde_json::from_str(&text).expect("json");
+    v["duration"] = json!(1.0);
+    v["output"]["network_decimation"] = json!(50);
+    let file = write_json(&dir, "tdma.json", &v);
+    let out = dir.join("out");
+    let o = run(&[
+        "run",
+        file.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = Command::new("python3")
+        .arg(repo().join("../shared/contract-check"))
+        .arg(&out)
+        .output()
+        .expect("python3 runs ../shared/contract-check");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stdout));
+    let s: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(s["network"]["kind"], json!("tdma"));
+    assert_eq!(s["lost_frames"], json!(0));
+    assert_eq!(s["network"]["cycles"], json!(200), "1 s of 5 ms cycles");
+    assert!(s["network"]["random_words_drawn"].as_u64().unwrap() > 0);
+    // network.csv: the header, and every frame of cycles 0, 50, 100, 150: sync, 5
+    // static frames and the 6 list entries.
+    let net = std::fs::read_to_string(out.join("network.csv")).unwrap();
+    let mut lines = net.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "cycle,slot,sender,kind,channel,bytes,nominal,send_time,delivery_time,lost,latency,info"
+    );
+    assert_eq!(lines.count(), 4 * 12);
+    let epochs = std::fs::read_to_string(out.join("epochs.csv")).unwrap();
+    assert!(epochs.starts_with(
+        "t_start,t_end,tau_tau1_requested,tau_tau1_achieved,tau_tau2_requested,tau_tau2_achieved"
+    ));
+    let timeline = std::fs::read_to_string(out.join("timeline.svg")).unwrap();
+    assert!(timeline.contains("TDMA slot timeline") && timeline.contains("time t [ms]"));
+}
