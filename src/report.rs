@@ -1,5 +1,6 @@
-//! SVG plots of a run: line plots of signals over time ([`LinePlot`]) and the
-//! grid-search heatmap with an optimizer's path ([`Heatmap`]).
+//! SVG plots of a run: line plots of signals over time ([`LinePlot`]), the
+//! grid-search heatmap with an optimizer's path ([`Heatmap`]) and the TDMA slot
+//! timeline ([`SlotTimeline`]).
 //!
 //! Plots are drawn with `plotters` into an in-memory string and written with
 //! [`crate::output::write_atomic`]. Without font features plotters estimates text sizes
