@@ -14,21 +14,29 @@
 //!   rest — event kernel and node structure, what a monolithic scene pays for the
 //!   existence of partitions, networks and controllers;
 //! - recording: digest only, trace.csv at decimation 100, and at decimation 1, against
-//!   no observer.
-//!
-//! TDMA, clock drift and jitter, and the lookahead baselines do not exist yet: their
-//! ratios join this table with their issues.
+//!   no observer;
+//! - the TDMA network: the 4-node scene on TDMA (the `tdma` setting of `dsmcosim
+//!   tradeoff`, [`tdma_network`]: slot 100 µs, cycle 5 ms = the channels' τ, guard 10 µs,
+//!   100 Mbit/s, 26 B headers; nothing drawn) against ideal channels, and with clock
+//!   drift, random walk, sync error and exponential jitter (`tdma_drift_jitter`) against
+//!   plain TDMA;
+//! - lookahead baselines: one controlled window (1 s, DSM with lookahead, CP) with a
+//!   `grid` baseline against DSM alone, and DSM alone against the uncontrolled 4-node
+//!   scene. The grid's forks run in parallel on all cores, so that ratio depends on the
+//!   core count (2 on the machine the README quotes).
 
 use std::path::PathBuf;
 use std::time::{Instant, SystemTime};
 
 use criterion::{criterion_group, BatchSize, Criterion, Throughput};
+use dsmcosim::control::experiment::Controller;
 use dsmcosim::cosim::CoSim;
 use dsmcosim::kernel::SimTime;
 use dsmcosim::multibody::{State, System};
 use dsmcosim::output::AtomicFile;
 use dsmcosim::scenario::{parse_str, Scenario};
 use dsmcosim::trace::Recorder;
+use dsmcosim::tradeoff::knobs::tdma_network;
 use serde_json::{json, Value};
 
 const GROUP: &str = "fidelity_1s";
@@ -44,15 +52,49 @@ fn scene(edit: impl FnOnce(&mut Value)) -> Scenario {
     parse_str(&v.to_string(), "bench").expect("valid bench scenario")
 }
 
+/// 4 quadrant nodes, space distribution, τ = 5 ms (ideal channels unless edited).
+fn quadrants(v: &mut Value) {
+    v["partition"] = json!({"quadrants": true});
+    v["channels"] = json!([
+        {"name": "tau1", "tau": 0.005, "borders": [[1, 2], [1, 4]]},
+        {"name": "tau2", "tau": 0.005, "borders": [[2, 3], [3, 4]]}
+    ]);
+}
+
 /// The scene on 4 quadrant nodes, ideal channels, space distribution, τ = 5 ms.
 fn four_nodes() -> Scenario {
+    scene(quadrants)
+}
+
+/// The 4-node scene on the TDMA network of the tradeoff study's `tdma` setting (with
+/// `drift_jitter`, its `tdma_drift_jitter` setting): the same periods, 5 ms.
+fn four_nodes_tdma(drift_jitter: bool) -> Scenario {
+    let network = tdma_network(&four_nodes(), drift_jitter);
     scene(|v| {
-        v["partition"] = json!({"quadrants": true});
-        v["channels"] = json!([
-            {"name": "tau1", "tau": 0.005, "borders": [[1, 2], [1, 4]]},
-            {"name": "tau2", "tau": 0.005, "borders": [[2, 3], [3, 4]]}
-        ]);
+        quadrants(v);
+        v["network"] = network;
     })
+}
+
+/// The 4-node scene under DSM with lookahead (CP, budget 400/s, τ in [1, 50] ms, one
+/// 1 s window), evaluating `baselines` on forks too.
+fn controlled(baselines: &[&str]) -> Scenario {
+    scene(|v| {
+        quadrants(v);
+        v["measurement"] = json!({"period": 1.0});
+        v["controller"] = json!({
+            "method": "dsm", "problem": "cp", "budget": 400.0,
+            "tau_min": 0.001, "tau_max": 0.05, "baselines": baselines,
+        });
+    })
+}
+
+/// One controlled window: the world and the controller before it (cloned per run).
+fn control_case(s: &Scenario) -> (CoSim, Controller) {
+    let controller = Controller::new(s)
+        .expect("controller")
+        .expect("scene has a controller");
+    (CoSim::new(s), controller)
 }
 
 /// A recorder of `s` writing trace.csv (to a temporary file that is dropped, never
@@ -137,16 +179,29 @@ fn bench_fidelity(c: &mut Criterion) {
             BatchSize::LargeInput,
         )
     });
+    let (tdma, drift) = (four_nodes_tdma(false), four_nodes_tdma(true));
     for (name, s) in [
         ("monolithic_point_mass", &point),
         ("monolithic_rigid", &rigid),
         ("four_nodes_tau_5ms", &nodes),
+        ("four_nodes_tdma", &tdma),
+        ("four_nodes_tdma_drift_jitter", &drift),
     ] {
         let world = CoSim::new(s);
         group.bench_function(name, |b| {
             b.iter_batched_ref(
                 || world.clone(),
                 |w| w.advance_to(ONE_SECOND, &mut ()).expect("bench run"),
+                BatchSize::LargeInput,
+            )
+        });
+    }
+    for (name, baselines) in [("dsm_window", &[][..]), ("dsm_grid_window", &["grid"][..])] {
+        let (world, controller) = control_case(&controlled(baselines));
+        group.bench_function(name, |b| {
+            b.iter_batched_ref(
+                || (world.clone(), controller.clone()),
+                |(w, c)| c.run_until(w, &mut (), ONE_SECOND).expect("bench run"),
                 BatchSize::LargeInput,
             )
         });
@@ -209,6 +264,26 @@ const RATIOS: &[(&str, &str, &str)] = &[
         "trace.csv every step ÷ no observer",
         "record_trace_decimation_1",
         "monolithic_point_mass",
+    ),
+    (
+        "TDMA vs ideal: 4 nodes on TDMA ÷ ideal channels",
+        "four_nodes_tdma",
+        "four_nodes_tau_5ms",
+    ),
+    (
+        "drift+jitter vs plain TDMA",
+        "four_nodes_tdma_drift_jitter",
+        "four_nodes_tdma",
+    ),
+    (
+        "lookahead: DSM window ÷ uncontrolled 4 nodes",
+        "dsm_window",
+        "four_nodes_tau_5ms",
+    ),
+    (
+        "lookahead baselines: DSM + grid ÷ DSM alone",
+        "dsm_grid_window",
+        "dsm_window",
     ),
 ];
 
@@ -273,6 +348,15 @@ fn interleaved(rounds: usize) {
             t.elapsed().as_secs_f64()
         })
     };
+    let window = |s: &Scenario| -> Case {
+        let (world, controller) = control_case(s);
+        Box::new(move || {
+            let (mut w, mut c) = (world.clone(), controller.clone());
+            let t = Instant::now();
+            c.run_until(&mut w, &mut (), ONE_SECOND).expect("bench run");
+            t.elapsed().as_secs_f64()
+        })
+    };
     let nodes = four_nodes();
     let bare = |outputs: bool| -> Case {
         let (system, state) = (System::new(&point), State::initial(&point));
@@ -295,6 +379,13 @@ fn interleaved(rounds: usize) {
         ("monolithic_point_mass", cosim(&point)),
         ("monolithic_rigid", cosim(&rigid)),
         ("four_nodes_tau_5ms", cosim(&nodes)),
+        ("four_nodes_tdma", cosim(&four_nodes_tdma(false))),
+        (
+            "four_nodes_tdma_drift_jitter",
+            cosim(&four_nodes_tdma(true)),
+        ),
+        ("dsm_window", window(&controlled(&[]))),
+        ("dsm_grid_window", window(&controlled(&["grid"]))),
         ("record_digest_only", recorded(&point, None)),
         ("record_trace_decimation_100", recorded(&point, Some(100))),
         ("record_trace_decimation_1", recorded(&point, Some(1))),
