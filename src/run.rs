@@ -237,8 +237,14 @@ fn write_summary(
     };
     let sim_seconds = SimTime(outcome.steps * scenario.dt.0).as_secs_f64();
     let epochs = world.epochs();
+    // Mean over the windows; a value that every window shares is reported as it is
+    // (a sum of n copies divided by n need not give the same f64 back).
     let mean = |f: &dyn Fn(&crate::cosim::EpochRecord) -> f64| {
-        (!epochs.is_empty()).then(|| epochs.iter().map(f).sum::<f64>() / epochs.len() as f64)
+        let first = f(epochs.first()?);
+        if epochs.iter().all(|e| f(e) == first) {
+            return Some(first);
+        }
+        Some(epochs.iter().map(f).sum::<f64>() / epochs.len() as f64)
     };
     let tdma = world.tdma().is_some();
     let channels: Vec<_> = world

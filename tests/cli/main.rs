@@ -112,6 +112,20 @@ fn run_writes_the_output_contract_and_is_deterministic() {
     );
     // 2000 steps, every 20th plus the last: rows at 0, 0.02, …, 2.0.
     assert_eq!(trace.lines().count(), 1 + 101);
+    // The plots of a monolithic run: titled, both axes labelled with units, a legend.
+    for (file, x_label, y_label) in [
+        ("constraints.svg", "t [s]", "[m]"),
+        ("bodies.svg", "t [s]", "[m]"),
+    ] {
+        let svg = std::fs::read_to_string(a.join(file))
+            .unwrap_or_else(|e| panic!("{file} is written: {e}"));
+        assert!(
+            svg.starts_with("<svg") || svg.starts_with("<?xml"),
+            "{file}"
+        );
+        assert!(svg.contains(x_label), "{file} labels its time axis");
+        assert!(svg.contains(y_label), "{file} gives the unit of its values");
+    }
     // No temporary files are left behind.
     for e in std::fs::read_dir(&a).unwrap() {
         let name = e.unwrap().file_name().into_string().unwrap();
@@ -257,14 +271,28 @@ fn divergence_exits_3_names_time_node_and_link_and_keeps_the_trace() {
 
 #[test]
 fn every_subcommand_has_help() {
-    for args in [
-        vec!["--help"],
-        vec!["run", "--help"],
-        vec!["validate", "--help"],
-    ] {
-        let o = run(&args);
-        assert!(o.status.success(), "{args:?}");
-        assert!(String::from_utf8_lossy(&o.stdout).contains("Usage"));
+    let top = run(&["--help"]);
+    assert!(top.status.success());
+    let listing = String::from_utf8_lossy(&top.stdout).into_owned();
+    let subcommands = [
+        "validate",
+        "run",
+        "resume",
+        "check",
+        "tradeoff",
+        "stability-map",
+        "sweep",
+        "sweep-merge",
+    ];
+    for sub in subcommands {
+        assert!(listing.contains(sub), "`--help` lists `{sub}`");
+        let o = run(&[sub, "--help"]);
+        assert!(o.status.success(), "{sub} --help");
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            text.contains("Usage") && text.contains(sub),
+            "{sub} --help prints its usage"
+        );
     }
 }
 

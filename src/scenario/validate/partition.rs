@@ -41,7 +41,16 @@ pub(super) fn partition(
     };
     let mut link_owner: Vec<usize> = links
         .iter()
-        .map(|l| default_owner(node_of[l.a], node_of[l.b], node_of[l.a.min(l.b)], ring))
+        .map(|l| {
+            // The general rule names the lower-numbered body (by id, not by position in
+            // the file: `bodies` may list ids in any order).
+            let lower = if bodies[l.a].id <= bodies[l.b].id {
+                l.a
+            } else {
+                l.b
+            };
+            default_owner(node_of[l.a], node_of[l.b], node_of[lower], ring)
+        })
         .collect();
     overrides(&p.link_owners, &node_of, bodies, links, &mut link_owner)?;
     Ok(PartitionSpec {
@@ -146,15 +155,15 @@ fn quadrants(grid: Option<&GridFile>) -> Result<(usize, Vec<usize>, bool)> {
 
 /// The owner of a link between nodes `a` and `b` without an override: the common node
 /// of an internal link; on the thesis ring the node whose clockwise neighbour is the
-/// other (1 owns 1–2, 2 owns 2–3, 3 owns 3–4, 4 owns 4–1); else `first`, the node of the
-/// body that comes first in file order (SPEC section 3).
-fn default_owner(a: usize, b: usize, first: usize, ring: bool) -> usize {
+/// other (1 owns 1–2, 2 owns 2–3, 3 owns 3–4, 4 owns 4–1); else `lower`, the node of
+/// the link's lower-numbered body (SPEC section 3).
+fn default_owner(a: usize, b: usize, lower: usize, ring: bool) -> usize {
     if a == b || (ring && (a + 1) % 4 == b) {
         a
     } else if ring && (b + 1) % 4 == a {
         b
     } else {
-        first
+        lower
     }
 }
 

@@ -182,3 +182,23 @@ fn one_node_needs_no_channels_and_overrides_apply_to_quadrants() {
     );
     assert_eq!(border_links(&s), vec![(3, 5, 1), (4, 6, 1)]);
 }
+
+#[test]
+fn the_general_rule_goes_by_body_id_not_by_file_order() {
+    // Bodies listed as 5 then 2, the link written 5–2: body 2 is the lower-numbered
+    // one, so its node (node 1 = [2]) owns the border link, whatever the file order.
+    let text = r#"{"name": "p", "seed": 1, "duration": 1.0, "dt": 0.001,
+        "model": {
+          "bodies": [{"id": 5, "mass": 1.0, "size": 0.2, "position": [1.8, 0, 0]},
+                     {"id": 2, "mass": 1.0, "size": 0.2, "position": [0, 0, 0]},
+                     {"id": 9, "mass": 1.0, "size": 0.2, "position": [3.6, 0, 0]}],
+          "links": [{"a": 5, "b": 2}, {"a": 9, "b": 5}]},
+        "partition": {"nodes": [[2], [5], [9]]},
+        "channels": [{"name": "c", "tau": 0.001}]}"#;
+    let s = match parse_str(text, "test.json") {
+        Ok(s) => s,
+        Err(e) => panic!("expected a valid scenario, got: {e}"),
+    };
+    assert_eq!(owner(&s, 5, 2), 1, "5–2 belongs to body 2's node");
+    assert_eq!(owner(&s, 9, 5), 2, "9–5 belongs to body 5's node");
+}
