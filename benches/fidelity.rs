@@ -24,6 +24,7 @@
 //!   `grid` baseline against DSM alone, and DSM alone against the uncontrolled 4-node
 //!   scene. The grid's forks run in parallel on all cores, so that ratio depends on the
 //!   core count (2 on the machine the README quotes).
+mod common;
 
 use std::path::PathBuf;
 use std::time::{Instant, SystemTime};
@@ -287,20 +288,9 @@ const RATIOS: &[(&str, &str, &str)] = &[
     ),
 ];
 
-/// Median time [ns] criterion recorded for `case` since `since`, if it ran.
+/// Median time [ns] criterion recorded for `case` of this bench's group since `since`.
 fn median(case: &str, since: SystemTime) -> Option<f64> {
-    let home = std::env::var_os("CRITERION_HOME")
-        .map(PathBuf::from)
-        .or_else(|| {
-            std::env::var_os("CARGO_TARGET_DIR").map(|d| PathBuf::from(d).join("criterion"))
-        })
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/criterion"));
-    let path = home.join(GROUP).join(case).join("new/estimates.json");
-    if std::fs::metadata(&path).ok()?.modified().ok()? < since {
-        return None;
-    }
-    let v: Value = serde_json::from_str(&std::fs::read_to_string(path).ok()?).ok()?;
-    v["median"]["point_estimate"].as_f64()
+    common::median(GROUP, case, since)
 }
 
 fn print_ratios(since: SystemTime) {

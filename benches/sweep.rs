@@ -16,6 +16,7 @@
 //!
 //! After criterion has measured both, the bench prints points per minute for each
 //! thread count and the 2-vs-1-thread ratio, from the medians of this run.
+mod common;
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -23,7 +24,6 @@ use std::time::SystemTime;
 
 use criterion::{criterion_group, BatchSize, Criterion, Throughput};
 use dsmcosim::sweep::{self, Options, Shard};
-use serde_json::Value;
 
 const GROUP: &str = "sweep_tdma4_slot_layouts";
 const THREADS: [usize; 2] = [1, 2];
@@ -104,20 +104,9 @@ fn bench_sweep(c: &mut Criterion) {
     group.finish();
 }
 
-/// Median time [ns] criterion recorded for `case` since `since`, if it ran.
+/// Median time [ns] criterion recorded for `case` of this bench's group since `since`.
 fn median(case: &str, since: SystemTime) -> Option<f64> {
-    let home = std::env::var_os("CRITERION_HOME")
-        .map(PathBuf::from)
-        .or_else(|| {
-            std::env::var_os("CARGO_TARGET_DIR").map(|d| PathBuf::from(d).join("criterion"))
-        })
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/criterion"));
-    let path = home.join(GROUP).join(case).join("new/estimates.json");
-    if std::fs::metadata(&path).ok()?.modified().ok()? < since {
-        return None;
-    }
-    let v: Value = serde_json::from_str(&std::fs::read_to_string(path).ok()?).ok()?;
-    v["median"]["point_estimate"].as_f64()
+    common::median(GROUP, case, since)
 }
 
 fn print_table(since: SystemTime) {
