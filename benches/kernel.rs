@@ -3,16 +3,19 @@
 //! `now + delay` (seeded pseudo-random delay and class). Measured for the
 //! [`Kernel<u64>`] and, in the same group so their ratio comes from one run, for a bare
 //! `priority_queue::PriorityQueue<u64, Reverse<(u64, u8, u64)>>` doing the same
-//! pushes and pops with the same keys.
+//! pushes and pops with the same keys, twice: with the crate's default hasher (SipHash)
+//! and with the kernel's [`SlotHasher`], so that the kernel's own overhead (payload
+//! slab, free list, checked keys) shows apart from the choice of hasher.
 //!
 //! Run: `cargo bench --bench kernel` (add a filter, e.g. `-- hold/kernel`, for one).
 //! Throughput is in events (one pop + one push) per second.
 
 use std::cmp::Reverse;
+use std::hash::BuildHasherDefault;
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use dsmcosim::kernel::{EventClass, Kernel, SimTime};
+use dsmcosim::kernel::{EventClass, Kernel, SimTime, SlotHasher};
 use priority_queue::PriorityQueue;
 use rand_chacha::rand_core::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -48,16 +51,43 @@ fn filled_kernel(n: usize, draws: &[(u64, EventClass)]) -> Kernel<u64> {
     k
 }
 
-type Bare = PriorityQueue<u64, Reverse<(u64, u8, u64)>>;
+type Bare<H> = PriorityQueue<u64, Reverse<(u64, u8, u64)>, H>;
 
-fn filled_bare(n: usize, draws: &[(u64, EventClass)]) -> (Bare, u64) {
-    let mut q = Bare::with_capacity(n);
+fn filled_bare<H: std::hash::BuildHasher + Default>(
+    n: usize,
+    draws: &[(u64, EventClass)],
+) -> (Bare<H>, u64) {
+    let mut q = Bare::with_capacity_and_default_hasher(n);
     let mut seq = 0u64;
     for &(delay, class) in draws.iter().cycle().take(n) {
         q.push(seq, Reverse((delay, class as u8, seq)));
         seq += 1;
     }
     (q, seq)
+}
+
+/// The hold loop on a bare queue: pop the earliest, push one at `now + delay`.
+fn bench_bare<H: std::hash::BuildHasher + Default>(
+    group: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
+    name: &str,
+    n: usize,
+    draws: &[(u64, EventClass)],
+) {
+    let (mut bare, mut seq) = filled_bare::<H>(n, draws);
+    let mut next = n;
+    group.bench_function(BenchmarkId::new(name, n), |b| {
+        b.iter(|| {
+            for _ in 0..OPS {
+                let (_, Reverse((now, _, _))) = bare.pop().expect("hold keeps n events");
+                let (delay, class) = draws[next % TABLE];
+                next += 1;
+                let time = now.checked_add(delay).expect("future event");
+                bare.push(black_box(seq), Reverse((time, class as u8, seq)));
+                seq += 1;
+            }
+        })
+    });
+    assert_eq!(bare.len(), n);
 }
 
 fn bench_hold(c: &mut Criterion) {
@@ -84,21 +114,13 @@ fn bench_hold(c: &mut Criterion) {
         });
         assert_eq!(kernel.len(), n);
 
-        let (mut bare, mut seq) = filled_bare(n, &draws);
-        let mut next = n;
-        group.bench_function(BenchmarkId::new("bare_priority_queue", n), |b| {
-            b.iter(|| {
-                for _ in 0..OPS {
-                    let (_, Reverse((now, _, _))) = bare.pop().expect("hold keeps n events");
-                    let (delay, class) = draws[next % TABLE];
-                    next += 1;
-                    let time = now.checked_add(delay).expect("future event");
-                    bare.push(black_box(seq), Reverse((time, class as u8, seq)));
-                    seq += 1;
-                }
-            })
-        });
-        assert_eq!(bare.len(), n);
+        bench_bare::<std::hash::RandomState>(&mut group, "bare_priority_queue", n, &draws);
+        bench_bare::<BuildHasherDefault<SlotHasher>>(
+            &mut group,
+            "bare_priority_queue_slot_hasher",
+            n,
+            &draws,
+        );
     }
     group.finish();
 }

@@ -6,5 +6,5 @@
 pub mod queue;
 pub mod time;
 
-pub use queue::{EventClass, EventKey, Kernel, KernelError};
+pub use queue::{EventClass, EventKey, Kernel, KernelError, SlotHasher};
 pub use time::SimTime;

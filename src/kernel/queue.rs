@@ -183,9 +183,10 @@ pub enum KernelError {
 /// (multiplicative) hash. Odd-constant multiplication is a bijection on the low bits, so
 /// consecutive indices land in distinct buckets, and it mixes into the high bits the
 /// hash table uses as tags. Fixed (no per-process seed), and an order of magnitude
-/// cheaper than the default SipHash; it never influences pop order either way.
-#[derive(Clone, Copy, Default)]
-struct SlotHasher(u64);
+/// cheaper than the default SipHash; it never influences pop order either way. Public
+/// so that `benches/kernel.rs` can give a bare `priority-queue` the same hasher.
+#[derive(Clone, Copy, Default, Debug)]
+pub struct SlotHasher(u64);
 
 impl Hasher for SlotHasher {
     #[inline]
