@@ -2,11 +2,12 @@
 """Prints the figures results/README.md quotes for the thesis experiments, from the
 stored runs in results/<scenario>/ (summary.json and epochs.csv).
 Usage: results/summarize_experiments.py [RESULTS_DIR]"""
-import csv, json, os, sys
+import csv, glob, json, os, sys
 
 root = sys.argv[1] if len(sys.argv) > 1 else os.path.dirname(os.path.abspath(__file__))
 names = ["grid16_space_cp", "grid16_space_cp_ds2", "grid16_space_cp_T10", "grid16_space_cp_ramp",
-         "grid16_space_up", "grid16_time_cp", "grid16_time_up", "tdma4_space_cp", "tdma16_space_cp"]
+         "grid16_space_cp_ramp_ds2", "grid16_space_up", "grid16_time_cp", "grid16_time_cp_ds2",
+         "grid16_time_up", "tdma4_space_cp", "tdma16_space_cp"]
 
 def mean(xs):
     xs = [x for x in xs if x == x]
@@ -36,16 +37,39 @@ for n in names:
     if s["controller"]["problem"]["kind"] == "cp" and opt_cols:
         budget = s["controller"]["problem"]["budget"]
         early = [r for r in rows if float(r["t_end"]) <= 12.0]
-        faster_first = 0
+        faster_first = equal = 0
         for r in early:
             t1 = float(r[opt_cols[0]]); t2 = 1.0 / (budget - 1.0 / t1)
-            faster_first += t1 < t2
+            faster_first += t1 < t2 - 1e-12
+            equal += abs(t1 - t2) <= 1e-12
         print(f"   windows in [0, 12) s where the grid optimum gives {chans[0]} the smaller delay: "
-              f"{faster_first} of {len(early)}")
+              f"{faster_first} of {len(early)}; equal delays: {equal}; {chans[1]} smaller: "
+              f"{len(early) - faster_first - equal}")
         gap = mean([abs(float(r[f'tau_{chans[0]}_requested']) - float(r[opt_cols[0]])) for r in rows])
         print(f"   mean |DSM {chans[0]} − grid optimum| = {gap * 1e3:.2f} ms")
+        opt_ms = [round(float(r[opt_cols[0]]) * 1e3) for r in rows]
+        hist = {v: opt_ms.count(v) for v in sorted(set(opt_ms))}
+        print(f"   grid optimum {chans[0]} [ms]: windows per value " +
+              ", ".join(f"{v}: {k}" for v, k in hist.items()))
+        live_ms = [round(float(r[f'tau_{chans[0]}_requested']) * 1e3, 1) for r in rows]
+        common = max(sorted(set(live_ms)), key=live_ms.count)
+        print(f"   DSM {chans[0]} at its most common value {common} ms in {live_ms.count(common)} of {len(rows)} windows")
     elif opt_cols:
         faster = sum(float(r[opt_cols[1]]) < float(r[opt_cols[0]]) for r in rows)
         print(f"   windows where the grid optimum gives {opt_cols[1][len('grid_opt_tau_'):]} the smaller delay: "
               f"{faster} of {len(rows)}; DSM: "
               f"{sum(float(r[f'tau_{chans[1]}_requested']) < float(r[f'tau_{chans[0]}_requested']) for r in rows)} of {len(rows)}")
+
+# Wall time of every stored run (the README's "Runs and time to regenerate" table).
+print()
+print("| stored run | status | wall time [s] |")
+print("|---|---|---|")
+total = 0.0
+for summary in sorted(glob.glob(os.path.join(root, "*", "summary.json"))):
+    d = os.path.dirname(summary)
+    if d.endswith(".new"):
+        continue
+    s = json.load(open(summary))
+    total += s["wall_seconds"]
+    print(f"| {os.path.basename(d)} | {s['status']} | {s['wall_seconds']:.1f} |")
+print(f"| **sum** | | **{total:.1f}** |")

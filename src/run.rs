@@ -358,7 +358,7 @@ fn write_plots(out: &Path, world: &CoSim, rec: &Recorder) -> Result<()> {
         if let Some(e) = epochs.last() {
             points.push((e.t_end.as_secs_f64(), f(e)));
         }
-        Series { label, points }
+        Series::new(label, points)
     };
     let period = world.scenario().measurement_period.as_secs_f64();
     plot(

@@ -433,3 +433,47 @@ fn a_diverged_point_is_a_row() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn the_line_plot_averages_over_seed_axes_and_names_values_by_their_labels() {
+    let dir = scratch("labels");
+    let sweep = json!({
+        "name": "lab", "base": "base.json",
+        "axes": [
+            {"name": "ghosts", "pointer": "/partition/ghosts", "values": ["integrate", "hold"],
+             "labels": ["integrated ghosts", "held ghosts"]},
+            {"name": "tau1", "pointer": "/channels/0/tau", "values": [0.001, 0.005]},
+            {"name": "draw", "pointer": "/seed", "values": [1, 2, 3]}
+        ]
+    });
+    let path = write_sweep(&dir, "lab.json", &sweep);
+    let out = dir.join("out");
+    ok(&[&"sweep", &path, &"--out", &out]);
+    let svg = read(&out.join("cost_vs_tau1.svg"));
+    assert!(
+        svg.contains("mean over draw"),
+        "the title names the averaged axis"
+    );
+    for label in ["ghosts = integrated ghosts", "ghosts = held ghosts"] {
+        assert!(svg.contains(label), "legend entry {label:?}");
+    }
+    assert!(
+        !svg.contains("draw = "),
+        "one line per ghosts value, not per draw"
+    );
+
+    // A label list of the wrong length is refused, naming the axis.
+    let mut bad = sweep.clone();
+    bad["axes"][0]["labels"] = json!(["only one"]);
+    let path = write_sweep(&dir, "bad.json", &bad);
+    let res = dsmcosim(&[
+        Path::new("sweep"),
+        &path,
+        Path::new("--out"),
+        &dir.join("bad"),
+    ]);
+    let stderr = String::from_utf8_lossy(&res.stderr);
+    assert_eq!(res.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("axes[0].labels"), "{stderr}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

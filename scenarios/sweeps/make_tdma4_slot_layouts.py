@@ -119,7 +119,8 @@ SWEEP = {
     "base": "tdma4_study_base.json",
     "combine": "factorial",
     "axes": [
-        {"name": "layout", "pointer": "/network", "values": [n for _, n in LAYOUTS]},
+        {"name": "layout", "pointer": "/network", "values": [n for _, n in LAYOUTS],
+         "labels": [f"{i} {name}" for i, (name, _) in enumerate(LAYOUTS)]},
         {"name": "drift", "pointer": "/network/drift_ppm",
          "values": [0, 300, 1000, 3000, 10000, 30000]},
         {"name": "draw", "pointer": "/seed", "values": list(range(1, 11))},

@@ -191,6 +191,11 @@ impl Controller {
         }))
     }
 
+    /// The live Dynamic Simplex (`None` unless the method is `dsm`).
+    pub fn dsm(&self) -> Option<&Dsm> {
+        self.dsm.as_ref()
+    }
+
     /// Start of the next window to decide.
     pub fn next_window(&self) -> SimTime {
         self.next

@@ -34,6 +34,9 @@ pub struct Series {
     /// Points `(x, y)` in drawing order. Non-finite points (and non-positive ones on a
     /// log axis) are skipped and break the line.
     pub points: Vec<(f64, f64)>,
+    /// Vertical bars `(x, low, high)` drawn in the series' colour (a range around each
+    /// point, e.g. min–max over repeated draws); empty for none.
+    pub bars: Vec<(f64, f64, f64)>,
 }
 
 impl Series {
@@ -42,7 +45,14 @@ impl Series {
         Series {
             label: label.into(),
             points,
+            bars: Vec::new(),
         }
+    }
+
+    /// The series with vertical bars `(x, low, high)`.
+    pub fn with_bars(mut self, bars: Vec<(f64, f64, f64)>) -> Series {
+        self.bars = bars;
+        self
     }
 }
 
@@ -205,8 +215,17 @@ fn render(plot: &LinePlot, target: &Path) -> Result<String> {
         .iter()
         .flat_map(|s| s.points.iter())
         .filter(|&&(x, y)| plottable(plot.x_scale, x) && plottable(plot.y_scale, y));
+    let bar_ends = plot
+        .series
+        .iter()
+        .flat_map(|s| s.bars.iter())
+        .flat_map(|&(x, lo, hi)| [(x, lo), (x, hi)])
+        .filter(|&(x, y)| plottable(plot.x_scale, x) && plottable(plot.y_scale, y));
     let x_axis = Axis::fit(plot.x_scale, valid.clone().map(|p| p.0));
-    let y_axis = Axis::fit(plot.y_scale, valid.map(|p| p.1));
+    let y_axis = Axis::fit(
+        plot.y_scale,
+        valid.map(|p| p.1).chain(bar_ends.map(|p| p.1)),
+    );
     let prepared: Vec<Prepared> = plot
         .series
         .iter()
@@ -268,6 +287,29 @@ fn render(plot: &LinePlot, target: &Path) -> Result<String> {
                     anno.legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style));
                 }
             }
+            let bars = series.bars.iter().filter(|&&(x, lo, hi)| {
+                plottable(plot.x_scale, x)
+                    && plottable(plot.y_scale, lo)
+                    && plottable(plot.y_scale, hi)
+            });
+            let thin = PALETTE[i % PALETTE.len()].stroke_width(1);
+            let bars: Vec<(f64, f64, f64)> = bars.copied().collect();
+            chart
+                .draw_series(
+                    bars.iter()
+                        .map(|&(x, lo, hi)| PathElement::new(vec![(x, lo), (x, hi)], thin)),
+                )
+                .map_err(&err)?;
+            // 4 px caps at both ends.
+            chart
+                .draw_series(
+                    bars.iter()
+                        .flat_map(|&(x, lo, hi)| [(x, lo), (x, hi)])
+                        .map(|p| {
+                            EmptyElement::at(p) + PathElement::new(vec![(-4, 0), (4, 0)], thin)
+                        }),
+                )
+                .map_err(&err)?;
             if plot.markers {
                 chart
                     .draw_series(

@@ -108,7 +108,7 @@ fn step_series(label: String, exp: &Experiment, f: &dyn Fn(usize) -> f64) -> Ser
     if let Some(w) = exp.windows.last() {
         points.push((w.t_end.as_secs_f64(), f(exp.windows.len() - 1)));
     }
-    Series { label, points }
+    Series::new(label, points)
 }
 
 /// cost_methods.svg, delays_optimum.svg and (with a surface window) surface.svg.
@@ -199,14 +199,11 @@ fn write_surface(out: &Path, world: &CoSim, exp: &Experiment, names: &[String]) 
     let t1 = window.map_or(t0, |w| w.t_end.as_secs_f64());
     let title = format!("{name} — cost surface over [{t0}, {t1}) s with the DSM path");
     if names.len() == 1 {
-        let curve = Series {
-            label: "grid search".into(),
-            points: grid.iter().map(|c| (c.x[0] * 1e3, c.objective)).collect(),
-        };
-        let dsm = Series {
-            label: "DSM candidates (in order)".into(),
-            points: path,
-        };
+        let curve = Series::new(
+            "grid search",
+            grid.iter().map(|c| (c.x[0] * 1e3, c.objective)).collect(),
+        );
+        let dsm = Series::new("DSM candidates (in order)", path);
         return write_line_plot(
             &out.join("surface.svg"),
             &LinePlot {

@@ -53,6 +53,10 @@ pub struct AxisFile {
     /// Evenly spaced numbers.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub range: Option<RangeFile>,
+    /// Optional short names of the values, one per value, used in plot legends instead
+    /// of the values themselves (useful when the values are long lists or objects).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub labels: Option<Vec<String>>,
 }
 
 /// `steps` evenly spaced numbers from `from` to `to`, both included.

@@ -1,13 +1,18 @@
 //! Plots of a sweep: `cost_vs_<axis>.svg` (mean cost against the first numeric axis,
-//! one line per combination of the other axes' values under `factorial`) and, with two
+//! one line per combination of the other axes' values under `factorial`, averaged over
+//! draw axes — those whose pointer is `/seed` — with min–max bars) and, with two
 //! or more axes, `cost_heatmap.svg` (mean cost over the first two axes; cells holding
 //! several points, under three or more axes, show their mean).
 //!
 //! An axis whose values are not all numbers is drawn at the index of each value, and
-//! its label says so.
+//! its label says so. Legends name a value by the axis's `labels` entry when the sweep
+//! file gives one, else by the value itself when it is at most 16 characters, else by
+//! `#<index>`.
 
 use std::collections::BTreeMap;
 use std::path::Path;
+
+use serde_json::Value;
 
 use super::file::Combine;
 use super::points::{Axis, Plan};
@@ -79,18 +84,53 @@ pub fn write(out: &Path, plan: &Plan, records: &[Record]) -> Result<()> {
     Ok(())
 }
 
-/// `cost_vs_<axis>.svg`.
+/// Whether `axis` only draws seeds (its pointer is `/seed`): such an axis repeats the
+/// same setting on other random draws, so the line plot averages over it.
+fn is_draw(axis: &Axis) -> bool {
+    axis.pointer.tokens() == ["seed"]
+}
+
+/// Longest value shown as itself in a legend; longer ones are shown by index.
+const SHORT_VALUE: usize = 16;
+
+/// Legend text of value `v` of `axis`: its label from the sweep file, else the value
+/// when short, else `#<index>`.
+fn value_label(axis: &Axis, v: usize) -> String {
+    if let Some(labels) = &axis.labels {
+        return labels[v].clone();
+    }
+    let text = match &axis.values[v] {
+        Value::String(s) => s.clone(),
+        other => other.to_string(),
+    };
+    if text.chars().count() <= SHORT_VALUE {
+        text
+    } else {
+        format!("#{v}")
+    }
+}
+
+/// `cost_vs_<axis>.svg`: mean cost against the first numeric axis that is not a draw
+/// axis, one line per combination of the other non-draw axes (under `factorial`). Draw
+/// axes (pointer `/seed`) are averaged over: each marker is the mean of the finite costs
+/// over the draws, with a bar from their minimum to their maximum.
 fn cost_vs(out: &Path, plan: &Plan, records: &[Record]) -> Result<()> {
-    let xa = plan
-        .axes
-        .iter()
-        .position(|a| a.numbers().is_some())
+    let draws: Vec<usize> = (0..plan.axes.len())
+        .filter(|&k| plan.combine == Combine::Factorial && is_draw(&plan.axes[k]))
+        .collect();
+    let xa = (0..plan.axes.len())
+        .find(|&k| !draws.contains(&k) && plan.axes[k].numbers().is_some())
+        .or_else(|| (0..plan.axes.len()).find(|k| !draws.contains(k)))
         .unwrap_or(0);
+    let draws: Vec<usize> = draws.into_iter().filter(|&k| k != xa).collect();
     let (x, x_label) = coordinates(&plan.axes[xa]);
-    let others: Vec<usize> = (0..plan.axes.len()).filter(|&k| k != xa).collect();
+    let others: Vec<usize> = (0..plan.axes.len())
+        .filter(|&k| k != xa && !draws.contains(&k))
+        .collect();
     let grouped = plan.combine == Combine::Factorial && !others.is_empty();
-    // Lines keyed by the other axes' value indices, so they come in axis order.
-    let mut lines: BTreeMap<Vec<usize>, Vec<(f64, f64)>> = BTreeMap::new();
+    // Lines keyed by the other axes' value indices, so they come in axis order; within
+    // a line, the costs of each x value (over the draws) in point order.
+    let mut lines: BTreeMap<Vec<usize>, BTreeMap<usize, Vec<f64>>> = BTreeMap::new();
     for r in records {
         let idx = &plan.points[r.index];
         let key = if grouped {
@@ -98,27 +138,55 @@ fn cost_vs(out: &Path, plan: &Plan, records: &[Record]) -> Result<()> {
         } else {
             Vec::new()
         };
-        lines.entry(key).or_default().push((x[idx[xa]], cost(r)));
+        lines
+            .entry(key)
+            .or_default()
+            .entry(idx[xa])
+            .or_default()
+            .push(cost(r));
     }
+    let averaged = !draws.is_empty();
     let series: Vec<Series> = lines
         .into_iter()
-        .map(|(key, mut points)| {
+        .map(|(key, by_x)| {
+            let mut points = Vec::new();
+            let mut bars = Vec::new();
+            for (xi, costs) in by_x {
+                let finite: Vec<f64> = costs.into_iter().filter(|c| c.is_finite()).collect();
+                if finite.is_empty() {
+                    points.push((x[xi], f64::NAN));
+                    continue;
+                }
+                let mean = finite.iter().sum::<f64>() / finite.len() as f64;
+                points.push((x[xi], mean));
+                if averaged {
+                    let lo = finite.iter().copied().fold(f64::INFINITY, f64::min);
+                    let hi = finite.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                    bars.push((x[xi], lo, hi));
+                }
+            }
             points.sort_by(|a, b| a.0.total_cmp(&b.0));
             let label = if grouped {
                 others
                     .iter()
                     .zip(&key)
-                    .map(|(&k, &v)| format!("{} = {}", plan.axes[k].name, plan.axes[k].values[v]))
+                    .map(|(&k, &v)| {
+                        format!("{} = {}", plan.axes[k].name, value_label(&plan.axes[k], v))
+                    })
                     .collect::<Vec<_>>()
                     .join(", ")
             } else {
                 "mean cost".to_string()
             };
-            Series::new(label, points)
+            Series::new(label, points).with_bars(bars)
         })
         .collect();
     let name = &plan.axes[xa].name;
-    let title = format!("{} — mean cost vs {name}", plan.name);
+    let mut title = format!("{} — mean cost vs {name}", plan.name);
+    if averaged {
+        let over: Vec<&str> = draws.iter().map(|&k| plan.axes[k].name.as_str()).collect();
+        title.push_str(&format!(" (mean over {}; bars: min–max)", over.join(", ")));
+    }
     write_line_plot(
         &out.join(format!("cost_vs_{name}.svg")),
         &LinePlot {

@@ -29,6 +29,9 @@ pub struct Axis {
     pub pointer: Pointer,
     /// Its values, in file order (a range already expanded).
     pub values: Vec<Value>,
+    /// Short names of the values for plot legends, one per value; `None` when the file
+    /// gives none.
+    pub labels: Option<Vec<String>>,
 }
 
 impl Axis {
@@ -197,10 +200,33 @@ fn axis(k: usize, a: &AxisFile, earlier: &[Axis]) -> Result<Axis> {
                 .collect::<Result<_>>()?
         }
     };
+    if let Some(labels) = &a.labels {
+        if labels.len() != values.len() {
+            return Err(Error::invalid(
+                at("labels"),
+                format!(
+                    "axis `{}` has {} values but {} labels",
+                    a.name,
+                    values.len(),
+                    labels.len()
+                ),
+            ));
+        }
+        if let Some(i) = labels
+            .iter()
+            .position(|l| l.trim().is_empty() || l.chars().any(char::is_control))
+        {
+            return Err(Error::invalid(
+                format!("axes[{k}].labels[{i}]"),
+                format!("must be a non-empty line of text (got {:?})", labels[i]),
+            ));
+        }
+    }
     Ok(Axis {
         name: a.name.clone(),
         pointer,
         values,
+        labels: a.labels.clone(),
     })
 }
 

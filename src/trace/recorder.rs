@@ -212,18 +212,15 @@ impl Recorder {
     /// Series for the constraint plot: one per link (small models) or the envelope.
     pub fn constraint_series(&self) -> Vec<Series> {
         if self.link_series.is_empty() {
-            return vec![Series {
-                label: format!("max over {} links of |w|", self.link_count),
-                points: zip(&self.times, &self.envelope),
-            }];
+            return vec![Series::new(
+                format!("max over {} links of |w|", self.link_count),
+                zip(&self.times, &self.envelope),
+            )];
         }
         self.link_series
             .iter()
             .enumerate()
-            .map(|(k, s)| Series {
-                label: format!("L{}", k + 1),
-                points: zip(&self.times, s),
-            })
+            .map(|(k, s)| Series::new(format!("L{}", k + 1), zip(&self.times, s)))
             .collect()
     }
 
@@ -232,10 +229,7 @@ impl Recorder {
         let mut out = Vec::new();
         for (series, &(_, id)) in self.body_series.iter().zip(&self.plot_bodies) {
             for (ax, s) in ["x", "y", "z"].iter().zip(series) {
-                out.push(Series {
-                    label: format!("{ax} of B{id}"),
-                    points: zip(&self.times, s),
-                });
+                out.push(Series::new(format!("{ax} of B{id}"), zip(&self.times, s)));
             }
         }
         out

@@ -166,18 +166,127 @@ fn shipped(name: &str, duration: f64, baselines: Value) -> Scenario {
 }
 
 #[test]
-fn time_cp_grid_optimum_never_gives_states_the_smaller_delay() {
+fn time_cp_grid_optimum_never_slows_forces_below_states_and_sometimes_speeds_them_up() {
     // Thesis: constraint forces get the smaller delay. Under the 400 Hz budget the
-    // force delay is below the state delay exactly when τ_state > 5 ms.
-    let (_, exp) = run(&shipped("grid16_time_cp", 6.0, json!(["grid"])));
+    // force delay is below the state delay exactly when τ_state > 5 ms. Over the 12 s
+    // while body 1 is driven our grid optimum never makes states faster than forces,
+    // but it often picks equal delays (τ_state = 5 ms): a grid that always picked equal
+    // delays would pass the first check, so also count the windows where forces are
+    // strictly faster and require at least one. That is all the model shows: "forces
+    // never slower", not "forces faster" in most windows (results/README.md).
+    let (_, exp) = run(&shipped("grid16_time_cp", 12.0, json!(["grid"])));
+    let mut forces_faster = 0;
     for w in &exp.windows {
         let tau_state = w.grid_best.as_ref().expect("grid").x[0];
         assert!(
             tau_state >= 0.005 - 1e-12,
-            "window {}: τ_state {tau_state}",
+            "window {}: τ_state {tau_state} makes states faster",
             w.t_start
         );
+        forces_faster += usize::from(tau_state > 0.005 + 1e-12);
     }
+    eprintln!(
+        "time CP, 12 s: forces strictly faster in {forces_faster} of {} windows",
+        exp.windows.len()
+    );
+    assert!(
+        forces_faster >= 1,
+        "the grid optimum always picked equal delays"
+    );
+}
+
+#[test]
+fn time_up_grid_optimum_gives_forces_the_smaller_delay_in_most_windows() {
+    // Thesis: in time UP the force delay stays below the state delay. Our grid optimum
+    // does so in a majority of windows, not in all of them (results/README.md); assert
+    // the majority, over windows where the two delays differ and over all windows.
+    let (_, exp) = run(&shipped("grid16_time_up", 10.0, json!(["grid"])));
+    let (mut forces, mut states) = (0, 0);
+    for w in &exp.windows {
+        let x = &w.grid_best.as_ref().expect("grid").x;
+        let (tau_state, tau_force) = (x[0], x[1]);
+        forces += usize::from(tau_force < tau_state);
+        states += usize::from(tau_state < tau_force);
+    }
+    let n = exp.windows.len();
+    eprintln!("time UP, 10 s: forces faster in {forces}, states faster in {states} of {n}");
+    assert!(forces > states, "forces {forces} vs states {states}");
+    assert!(2 * forces > n, "forces faster in {forces} of {n} windows");
+}
+
+#[test]
+fn dsm_with_a_small_simplex_stays_within_fifteen_percent_of_the_grid_optimum() {
+    // Ideal channels, D_s = 2 ms (the value that tracks on our scene). The DSM runs at
+    // the best vertex of a 2 ms lattice, chosen on costs up to one iteration stale, while
+    // the grid optimum is the best 1 ms point of each window chosen with hindsight, so
+    // the DSM cannot match it; 15 % is the bound the TDMA test uses, fixed beforehand
+    // (no-optimization is the point the DSM starts from). The thesis D_s = 12 ms must
+    // track worse on the same windows (its simplex cannot resolve the optimum).
+    let ratio = |name: &str| {
+        let (_, exp) = run(&shipped(name, 8.0, json!(["grid"])));
+        let dsm = exp.mean("dsm", "dsm").expect("dsm");
+        let grid = exp.mean("grid", "dsm").expect("grid");
+        assert!(
+            dsm >= grid - 1e-12,
+            "{name}: grid {grid} must bound DSM {dsm}"
+        );
+        dsm / grid
+    };
+    let (small, thesis) = (ratio("grid16_space_cp_ds2"), ratio("grid16_space_cp"));
+    eprintln!("space CP, 8 s: DSM/grid {small:.3} at D_s = 2 ms, {thesis:.3} at 12 ms");
+    assert!(small < 1.15, "DSM/grid {small} at D_s = 2 ms");
+    assert!(small < thesis, "D_s 2 ms ({small}) vs 12 ms ({thesis})");
+}
+
+#[test]
+fn online_measurement_runs_one_dsm_candidate_per_window_on_the_live_plant() {
+    // `online`: no fork is measured; each window the live plant runs the one candidate
+    // the DSM asks for, and the window's measured cost is told back.
+    let s = scene(
+        10.0,
+        Some(json!({
+            "method": "dsm", "problem": "cp", "budget": 400.0, "tau_max": 0.03,
+            "initial": [0.006], "measure": "online", "dsm": {"size": 0.004, "reflections": 3}
+        })),
+    );
+    let mut world = CoSim::new(&s);
+    let mut ctl = experiment::Controller::new(&s)
+        .expect("valid")
+        .expect("a controller");
+    // The same DSM, before any window: replaying the live costs into it must ask for
+    // exactly the delays the live plant ran, one per window.
+    let mut replay = ctl.dsm().expect("a DSM").clone();
+    ctl.run_until(&mut world, &mut (), s.duration)
+        .expect("runs");
+    let exp = &ctl.experiment;
+    assert_eq!(exp.windows.len(), 10);
+    for (i, w) in exp.windows.iter().enumerate() {
+        assert!(w.dsm_path.is_empty(), "window {i}: online measures no fork");
+        let asked = replay.ask().expect("the DSM always asks");
+        assert_eq!(asked.len(), 1);
+        assert_eq!(
+            asked[0].to_bits(),
+            w.live.x[0].to_bits(),
+            "window {i}: the live plant ran the asked candidate"
+        );
+        assert!(w.live.objective.is_finite(), "window {i}: measured live");
+        replay.tell(w.live.objective);
+        let tau1 = w.live.x[0];
+        assert!((0.001..=0.03).contains(&tau1), "window {i}: τ1 {tau1}");
+        let tau2 = 1.0 / (400.0 - 1.0 / tau1);
+        assert!(
+            (0.001..=0.03).contains(&tau2),
+            "window {i}: τ2 {tau2} from the budget"
+        );
+    }
+    let live = ctl.dsm().expect("a DSM");
+    assert_eq!(live.measurements(), exp.windows.len(), "one per window");
+    assert_eq!(replay.measurements(), live.measurements());
+    assert_eq!(replay.best(), live.best());
+    let mut taus: Vec<u64> = exp.windows.iter().map(|w| w.live.x[0].to_bits()).collect();
+    taus.sort_unstable();
+    taus.dedup();
+    assert!(taus.len() >= 3, "the live delays change: {taus:?}");
 }
 
 #[test]
@@ -206,10 +315,6 @@ fn a_ten_second_period_tracks_the_grid_optimum_worse_than_one_second() {
     assert!(
         t10 > t1,
         "T = 10 s ({t10}) must track worse than T = 1 s ({t1})"
-    );
-    assert!(
-        t1 >= 1.0 - 1e-12,
-        "the grid optimum is a lower bound on grid points"
     );
 }
 
