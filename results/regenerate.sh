@@ -1,16 +1,36 @@
 #!/usr/bin/env bash
 # Regenerates every stored run in results/ from its scenario and lists the digests that
-# changed. Usage: results/regenerate.sh   (from anywhere; builds the release binary)
+# changed. Usage: results/regenerate.sh [--studies]   (from anywhere; builds the release
+# binary)
 #
 # A stored run is a directory results/<dir>/ with a summary.json whose "scenario" key
-# names an existing scenarios/<scenario>.json; it is rerun into the same directory.
-# Directories ending in .new (left by `dsmcosim check`) are not stored runs. To add a
-# stored run: `dsmcosim run scenarios/<name>.json --out results/<name>`.
+# names an existing scenarios/<scenario>.json. Each is rerun into a fresh temporary
+# directory beside it, which then replaces it whole: a file the new run no longer writes
+# does not survive (the script names such files). A run that fails (exit code other than
+# 0, or 3 for a run that diverged, whose trace up to the divergence is its result) leaves
+# the stored directory untouched and stops the script. Directories ending in .new (left
+# by `dsmcosim check`) are not stored runs. To add a stored run:
+# `dsmcosim run scenarios/<name>.json --out results/<name>`.
+#
+# --studies also regenerates the speed-accuracy studies (results/tradeoff/, with its
+# subdirectories) and the stability map (results/stability/) with the commands the README
+# gives; they take minutes and their wall-time columns change on every run, so the
+# default leaves them alone.
 set -uo pipefail
 cd "$(dirname "$0")/.."
+studies=0
+for arg in "$@"; do
+  case "$arg" in
+    --studies) studies=1 ;;
+    -h|--help) sed -n '2,/^set /p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;;
+    *) echo "unknown argument: $arg (usage: results/regenerate.sh [--studies])" >&2; exit 2 ;;
+  esac
+done
 cargo build --release --quiet || exit 1
 bin=target/release/dsmcosim
 key() { python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])" "$1" "$2"; }
+tmp=$(mktemp -d results/.regenerate.XXXXXX) || exit 1
+trap 'rm -rf "$tmp"' EXIT
 found=0
 for summary in results/*/summary.json; do
   [ -f "$summary" ] || continue
@@ -21,12 +41,36 @@ for summary in results/*/summary.json; do
   if [ ! -f "$scenario" ]; then echo "$dir: skipped, no $scenario"; continue; fi
   found=1
   old=$(key "$summary" digest 2>/dev/null || echo none)
-  "$bin" run "$scenario" --out "$dir" >/dev/null
+  fresh="$tmp/run"
+  rm -rf "$fresh" "$tmp/old"
+  "$bin" run "$scenario" --out "$fresh" >/dev/null 2>"$tmp/stderr"
   code=$?
-  # Exit code 3 is a run that diverged: its trace up to the divergence is the result.
-  if [ $code -ne 0 ] && [ $code -ne 3 ]; then echo "$dir: failed (exit $code)"; exit $code; fi
+  if [ $code -ne 0 ] && [ $code -ne 3 ]; then
+    echo "$dir: failed (exit $code), left as it was: $(cat "$tmp/stderr")"
+    exit $code
+  fi
+  gone=$(comm -23 <(cd "$dir" && find . -type f | sort) <(cd "$fresh" && find . -type f | sort) \
+    | sed 's|^\./||' | tr '\n' ' ')
+  mv "$dir" "$tmp/old" && mv "$fresh" "$dir" || { echo "$dir: could not replace"; exit 1; }
   new=$(key "$summary" digest)
-  if [ "$old" != "$new" ]; then echo "$dir: digest changed $old -> $new"; else echo "$dir: unchanged"; fi
+  if [ "$old" != "$new" ]; then line="$dir: digest changed $old -> $new"; else line="$dir: unchanged"; fi
+  [ $code -eq 3 ] && line="$line (diverged, as a stored result)"
+  [ -n "$gone" ] && line="$line; removed (no longer written): ${gone% }"
+  echo "$line"
 done
 [ $found -eq 1 ] || echo "no stored runs found under results/"
+if [ $studies -eq 1 ]; then
+  study() {
+    local out=$1; shift
+    "$bin" "$@" --out "$out" >/dev/null || { echo "$out: failed: $bin $* --out $out"; exit 1; }
+    echo "$out: regenerated"
+  }
+  study results/tradeoff tradeoff scenarios/grid16_monolithic.json --duration 3
+  study results/tradeoff/horizon_10s tradeoff scenarios/grid16_monolithic.json --duration 10
+  study results/tradeoff/horizon_30s tradeoff scenarios/grid16_monolithic.json --duration 30
+  study results/tradeoff/grid16_space_fixed tradeoff scenarios/grid16_space_fixed.json --duration 3
+  study results/tradeoff/tdma4_space_fixed tradeoff scenarios/tdma4_space_fixed.json --duration 3
+  study results/tradeoff/grid16_rk4 tradeoff scenarios/grid16_rk4.json --duration 3
+  study results/stability stability-map scenarios/grid16_monolithic.json --duration 12
+fi
 exit 0

@@ -5,7 +5,7 @@
 //! replaced) and stays there for inspection. The verdict:
 //!
 //! 1. The digests in both `summary.json` files are compared (bit-for-bit over every
-//!    step, see [`crate::trace::digest`]).
+//!    step, TDMA cycle and epoch row, see [`crate::trace::digest`]).
 //! 2. The CSV files are compared record by record ([`crate::trace::compare`]): exactly
 //!    (equal text, i.e. equal bits) by default, or relatively with a tolerance. This
 //!    also catches a stored CSV that was edited, or a change in how values are written,
@@ -35,7 +35,7 @@ pub struct RunSummary {
     pub status: String,
     /// The divergence message of a diverged run.
     pub error: Option<String>,
-    /// Trace digest (hex).
+    /// Run digest (hex).
     pub digest: String,
     /// Wall-clock seconds the run took (absent in a hand-written summary) [s].
     pub wall_seconds: Option<f64>,

@@ -8,9 +8,15 @@
 //! the trace lines so far) and the controller (simplex searches, everything measured).
 //!
 //! Layout: the 16-byte magic `DSMCOSIM-CKPT\0\0\0`, the layout version as a
-//! little-endian `u32`, then the state in `postcard` encoding, which stores every `f64`
-//! as its exact bits (infinities and NaN included, which JSON cannot hold). Random
-//! streams will be part of the world when a scene has any.
+//! little-endian `u32`, the 32-byte BLAKE3 hash of the body, then the body: the state in
+//! `postcard` encoding, which stores every `f64` as its exact bits (infinities and NaN
+//! included, which JSON cannot hold). The TDMA network's random streams (clock drift,
+//! random walk, sync error, jitter) are part of the world, positions included.
+//!
+//! The hash is checked before anything is decoded, so a flipped bit anywhere in the
+//! body or the hash, a truncated or extended file, is refused rather than decoded into
+//! a different state (postcard alone accepts many such changes: most byte patterns are
+//! valid varints and floats).
 
 use std::path::{Path, PathBuf};
 
@@ -25,7 +31,9 @@ use crate::trace::Recorder;
 pub const MAGIC: &[u8; 16] = b"DSMCOSIM-CKPT\0\0\0";
 /// The checkpoint layout version this binary reads and writes; bumped whenever any
 /// serialized type changes.
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
+/// Length of the header: magic, version, body hash [bytes].
+const HEADER: usize = 16 + 4 + 32;
 
 /// A run's complete state.
 #[derive(serde::Serialize, serde::Deserialize)]
@@ -81,6 +89,7 @@ pub fn write(
         controller,
     })
     .map_err(|e| Error::io(&path, std::io::Error::other(e)))?;
+    bytes.extend_from_slice(blake3::hash(&body).as_bytes());
     bytes.extend_from_slice(&body);
     write_atomic(&path, &bytes)?;
     Ok(path)
@@ -109,8 +118,22 @@ pub fn read(path: &Path) -> Result<Checkpoint> {
             ),
         ));
     }
+    if bytes.len() < HEADER {
+        return Err(Error::invalid(
+            label,
+            "corrupted or truncated checkpoint: the header is incomplete",
+        ));
+    }
+    let body = &bytes[HEADER..];
+    if blake3::hash(body).as_bytes()[..] != bytes[MAGIC.len() + 4..HEADER] {
+        return Err(Error::invalid(
+            label,
+            "corrupted or truncated checkpoint: the BLAKE3 hash of its state does not match \
+             the one in its header",
+        ));
+    }
     let (cp, rest): (Checkpoint, &[u8]) =
-        postcard::take_from_bytes(&bytes[MAGIC.len() + 4..]).map_err(|e| corrupt(&label, &e))?;
+        postcard::take_from_bytes(body).map_err(|e| corrupt(&label, &e))?;
     if !rest.is_empty() {
         return Err(Error::invalid(
             label,

@@ -26,8 +26,10 @@ mod network;
 /// What a finished (or diverged) run measured.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Outcome {
-    /// Trace digest (hex).
+    /// Run digest (hex): every step, TDMA cycle and epoch row ([`crate::trace::digest`]).
     pub digest: String,
+    /// Dynamics digest (hex): the step and TDMA cycle records only.
+    pub dynamics_digest: String,
     /// Steps integrated (recorded steps: `steps + 1` rows including t = 0 on success).
     pub steps: u64,
     /// Largest `|w|` over the run [m].
@@ -124,6 +126,7 @@ fn finish(
     let experiment = controller.map(|c| c.experiment).unwrap_or_default();
     let outcome = Outcome {
         digest: recorder.digest(),
+        dynamics_digest: recorder.dynamics_digest(),
         steps: world.steps_done().saturating_sub(1),
         max_constraint_violation: world.max_violation(),
         mean_cost: world.mean_cost(),
@@ -212,6 +215,16 @@ fn write_epochs(out: &Path, world: &CoSim, exp: &Experiment) -> Result<()> {
     write_atomic(&out.join("epochs.csv"), s.as_bytes())
 }
 
+/// `digest_algorithm` in summary.json: the records of the chain, in order.
+const DIGEST_ALGORITHM: &str = "BLAKE3 chain d_(k+1) = BLAKE3(d_k, record_k) from 32 zero \
+bytes over the run's records in kernel event order: every step (t [ns], the bits of w, f, \
+p, v), every TDMA cycle (start, then per frame slot, sender, start, delivery [ns]), and \
+every epochs.csv row when its window closes (t_start, t_end [ns], the bits of each \
+channel's requested and achieved tau, bandwidth, cost; then, on a controlled run, the \
+bits of each objective, the grid optimum's count and bits, the measurement count). \
+dynamics_digest: the same chain over the step and TDMA cycle records only. See \
+dsmcosim::trace::digest";
+
 fn write_summary(
     out: &Path,
     world: &CoSim,
@@ -273,7 +286,8 @@ fn write_summary(
         "status": if error.is_some() { "diverged" } else { "ok" },
         "error": error,
         "digest": outcome.digest,
-        "digest_algorithm": "BLAKE3 chain d_(k+1) = BLAKE3(d_k, record_k) over every step: t [ns] and the bits of w, f, p, v (see trace::digest)",
+        "digest_algorithm": DIGEST_ALGORITHM,
+        "dynamics_digest": outcome.dynamics_digest,
         "steps": outcome.steps,
         "sim_seconds": sim_seconds,
         "wall_seconds": outcome.wall_seconds,

@@ -341,6 +341,11 @@ impl Controller {
                 dsm_path,
             });
             run?;
+            // The window's epochs.csv row is complete: its controller columns go to the
+            // recorder (digest) only for a window the live world closed.
+            if let Some(w) = exp.windows.last() {
+                obs.on_window(w);
+            }
             progress.tick(exp.windows.len() as u64);
             t = t_end;
             self.next = t;

@@ -46,6 +46,15 @@ pub trait Observer {
     /// Called when a message reaches its receiver at `t` (tests and tools; nothing of
     /// it reaches the trace).
     fn on_delivery(&mut self, _t: SimTime, _msg: &Message) {}
+
+    /// Called when a measurement window closes (its `Measurement` event), with the
+    /// world's columns of its epochs.csv row.
+    fn on_epoch(&mut self, _epoch: &EpochRecord) {}
+
+    /// Called when a controller has run a window on the live world (after
+    /// [`Observer::on_epoch`] of that window), with the controller's columns of its
+    /// epochs.csv row. Forks report nothing.
+    fn on_window(&mut self, _report: &crate::control::experiment::WindowReport) {}
 }
 
 /// A watcher that watches nothing.
@@ -363,6 +372,9 @@ impl CoSim {
             }
             Event::WindowEnd => {
                 self.window_end(t);
+                if let Some(e) = self.epochs.last() {
+                    obs.on_epoch(e);
+                }
                 Ok(())
             }
             Event::Cycle => self.cycle(t, obs),

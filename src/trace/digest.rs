@@ -1,22 +1,44 @@
-//! The run digest: BLAKE3 over the exact bytes of every recorded value, chained step by
-//! step.
+//! The run digest: BLAKE3 over the exact bytes of every recorded value, chained record
+//! by record.
 //!
-//! For every step k = 0..=steps, in step order, the step's record is the time `t_k` as a
-//! little-endian `u64` count of nanoseconds, then the `f64` bit patterns (little-endian)
-//! of every link's `w` then every link's `f` (link order), then every body's `p` then
-//! `v` (body order, x y z). The digest is the chain `d_{k+1} = BLAKE3(d_k ‖ record_k)`
-//! from `d_0` = 32 zero bytes, printed as 64 hex digits. Chaining keeps the whole state
-//! of the digest in 32 bytes, so a checkpoint can store it and a resumed run continues
-//! the very same chain.
+//! A run's records, in the order the kernel produces them (at equal time: measurement
+//! < controller < TDMA cycle < slot < sample < delivery < partition step, see
+//! [`crate::kernel::EventClass`]), so records of the four kinds below interleave in
+//! time order:
 //!
-//! On a TDMA scene each cycle adds a record too, when it is computed (at its start, in
-//! event order between the steps): the cycle's start [ns], then per frame in slot order
-//! its slot, sender, actual start [ns] and delivery [ns] (`u64::MAX` if lost), each a
-//! little-endian `u64` — so a run's digest also pins every frame's timing.
+//! 1. **Step** — for every step k = 0..=steps: the time `t_k` as a little-endian `u64`
+//!    count of nanoseconds, then the `f64` bit patterns (little-endian) of every link's
+//!    `w` then every link's `f` (link order), then every body's `p` then `v` (body
+//!    order, x y z). These are trace.csv's values, for every step, whatever the
+//!    decimation.
+//! 2. **TDMA cycle** — on a TDMA scene, each cycle when it is computed (at its start):
+//!    the cycle's start [ns], then per frame in slot order its slot, sender, actual start
+//!    [ns] and delivery [ns] (`u64::MAX` if lost), each a little-endian `u64` — so the
+//!    digest pins every frame's timing, which network.csv reports.
+//! 3. **Epoch row, world columns** — when a measurement window closes (its
+//!    `Measurement` event at `t_end`, before the step at `t_end`): `t_start` and `t_end` [ns] as
+//!    `u64`, then per channel (channel order) the bits of `tau_<c>_requested` and
+//!    `tau_<c>_achieved` [s], then `bandwidth` and `cost`.
+//! 4. **Epoch row, controller columns** — on a controlled run, right after the live
+//!    world closed the window and the controller recorded it: the bits of
+//!    `objective_<method>`, then of each baseline's objective (column order), then the
+//!    number of `grid_opt_tau_*` values as a `u64` (0 when the grid was not searched in
+//!    this window) and their bits, then `measurements` as a `u64`.
 //!
-//! Every step is hashed, whatever the trace decimation or the traced-body selection, so
-//! changing the output options never changes the digest; `-0.0` and `0.0` hash
-//! differently, as they are different bits.
+//! The digest is the chain `d_{k+1} = BLAKE3(d_k ‖ record_k)` from `d_0` = 32 zero
+//! bytes over all these records, printed as 64 hex digits (`digest` in summary.json).
+//! So a change in any value of trace.csv (at any step), network.csv or epochs.csv
+//! changes it. Chaining keeps the whole state of the digest in 32 bytes, so a checkpoint
+//! can store it and a resumed run continues the very same chain.
+//!
+//! `dynamics_digest` in summary.json is the same chain over the step and TDMA cycle
+//! records only: the live dynamics, which a controller's forks never touch, so it is
+//! equal for a controlled run and the same run without baselines (and equal to the
+//! `digest` this crate reported before epoch rows were hashed).
+//!
+//! Column names, decimation, traced-body selection and number formatting are not
+//! hashed, so changing the output options never changes the digest; `-0.0` and `0.0`
+//! hash differently, as they are different bits.
 
 /// Incremental digest of a run.
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -34,6 +56,11 @@ impl Digest {
     /// Adds a time in nanoseconds to the current record.
     pub fn time(&mut self, ns: u64) {
         self.record.extend_from_slice(&ns.to_le_bytes());
+    }
+
+    /// Adds a count or index to the current record (little-endian `u64`).
+    pub fn count(&mut self, n: u64) {
+        self.record.extend_from_slice(&n.to_le_bytes());
     }
 
     /// Adds the bit patterns of `values` to the current record.

@@ -1,9 +1,11 @@
-//! Per-step recording: digest of every step, decimated rows of `trace.csv`, and the few
-//! series the plots need (kept in memory; the full trace is streamed to disk).
+//! Per-step recording: the digest of every step, TDMA cycle and epoch row (see
+//! [`super::digest`]), decimated rows of `trace.csv`, and the few series the plots need
+//! (kept in memory; the full trace is streamed to disk).
 
 use std::io::Write;
 
-use crate::cosim::{Observer, StepValues};
+use crate::control::experiment::WindowReport;
+use crate::cosim::{EpochRecord, Observer, StepValues};
 use crate::output::AtomicFile;
 use crate::report::Series;
 
@@ -29,7 +31,10 @@ pub struct Recorder {
     line: String,
     /// Every trace line written so far, kept when checkpoints are written.
     kept: Option<String>,
+    /// Every step, TDMA cycle and epoch row: the run's digest.
     digest: Digest,
+    /// Steps and TDMA cycles only: the live dynamics, whatever is measured beside them.
+    dynamics: Digest,
     max_violation: f64,
     rows: u64,
     times: Vec<f64>,
@@ -60,6 +65,7 @@ impl Recorder {
             line: String::new(),
             kept: None,
             digest: Digest::new(),
+            dynamics: Digest::new(),
             max_violation: 0.0,
             rows: 0,
             times: Vec::new(),
@@ -93,16 +99,18 @@ impl Recorder {
 
     /// Records one step: digest always, CSV row and plot samples when the step is kept.
     pub fn record(&mut self, s: &StepValues) -> std::io::Result<()> {
-        self.digest.time(s.time.as_nanos());
-        self.digest.values(s.w);
-        self.digest.values(s.f);
-        for p in s.p {
-            self.digest.values(p.as_slice());
+        for d in [&mut self.digest, &mut self.dynamics] {
+            d.time(s.time.as_nanos());
+            d.values(s.w);
+            d.values(s.f);
+            for p in s.p {
+                d.values(p.as_slice());
+            }
+            for v in s.v {
+                d.values(v.as_slice());
+            }
+            d.end_step();
         }
-        for v in s.v {
-            self.digest.values(v.as_slice());
-        }
-        self.digest.end_step();
         for &w in s.w {
             self.max_violation = self.max_violation.max(w.abs());
         }
@@ -144,9 +152,16 @@ impl Recorder {
         file.write_all(self.line.as_bytes())
     }
 
-    /// The digest so far (hex).
+    /// The digest so far (hex): every step, TDMA cycle and epoch row.
     pub fn digest(&self) -> String {
         self.digest.hex()
+    }
+
+    /// The dynamics digest so far (hex): the same chain over the step and TDMA cycle
+    /// records only, so that it is equal for two runs of the same live dynamics whatever
+    /// they measured beside it (a controller's baselines, grid search, forks).
+    pub fn dynamics_digest(&self) -> String {
+        self.dynamics.hex()
     }
 
     /// Largest `|w|` recorded so far [m].
@@ -241,25 +256,118 @@ impl Observer for Recorder {
         self.record(values)
     }
 
-    /// A TDMA cycle: its record goes into the digest chain (see [`super::digest`]) and
-    /// its frames into network.csv.
+    /// A TDMA cycle: its record goes into both digest chains (see [`super::digest`])
+    /// and its frames into network.csv.
     fn on_cycle(&mut self, report: &CycleReport) -> std::io::Result<()> {
-        self.digest.time(report.start.as_nanos());
-        for f in &report.frames {
-            self.digest.time(f.slot as u64);
-            self.digest.time(f.sender as u64);
-            self.digest.time(f.start.as_nanos());
-            self.digest
-                .time(f.delivery.map_or(u64::MAX, |d| d.as_nanos()));
+        for d in [&mut self.digest, &mut self.dynamics] {
+            d.time(report.start.as_nanos());
+            for f in &report.frames {
+                d.count(f.slot as u64);
+                d.count(f.sender as u64);
+                d.time(f.start.as_nanos());
+                d.time(f.delivery.map_or(u64::MAX, |d| d.as_nanos()));
+            }
+            d.end_step();
         }
-        self.digest.end_step();
         match &mut self.network {
             Some(n) => n.record(report),
             None => Ok(()),
         }
     }
+
+    /// A closed window: the world's columns of its epochs.csv row go into the digest.
+    fn on_epoch(&mut self, e: &EpochRecord) {
+        let d = &mut self.digest;
+        d.time(e.t_start.as_nanos());
+        d.time(e.t_end.as_nanos());
+        for &(requested, achieved) in &e.taus {
+            d.values(&[requested, achieved]);
+        }
+        d.values(&[e.bandwidth, e.cost]);
+        d.end_step();
+    }
+
+    /// A window the controller ran: the controller's columns of its epochs.csv row go
+    /// into the digest.
+    fn on_window(&mut self, w: &WindowReport) {
+        let d = &mut self.digest;
+        d.value(w.live.objective);
+        for b in &w.baselines {
+            d.value(b.candidate.objective);
+        }
+        match &w.grid_best {
+            Some(c) => {
+                d.count(c.x.len() as u64);
+                d.values(&c.x);
+            }
+            None => d.count(0),
+        }
+        d.count(w.dsm_path.len() as u64);
+        d.end_step();
+    }
 }
 
 fn zip(t: &[f64], y: &[f64]) -> Vec<(f64, f64)> {
     t.iter().copied().zip(y.iter().copied()).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::control::experiment::{BaselineResult, Candidate};
+    use crate::kernel::SimTime;
+
+    fn epoch(cost: f64) -> EpochRecord {
+        EpochRecord {
+            t_start: SimTime::ZERO,
+            t_end: SimTime(1_000_000_000),
+            cost,
+            taus: vec![(0.005, 0.005)],
+            bandwidth: 200.0,
+        }
+    }
+
+    fn window(objective: f64, grid: Option<Vec<f64>>) -> WindowReport {
+        let c = |x: Vec<f64>, objective| Candidate { x, objective };
+        WindowReport {
+            t_start: SimTime::ZERO,
+            t_end: SimTime(1_000_000_000),
+            live: c(vec![0.005], 0.5),
+            baselines: vec![BaselineResult {
+                name: "no_opt".into(),
+                candidate: c(vec![0.005], objective),
+            }],
+            grid_best: grid.map(|x| c(x, 0.25)),
+            dsm_path: Vec::new(),
+        }
+    }
+
+    /// (digest, dynamics digest) after one epoch row.
+    fn digests(e: &EpochRecord, w: Option<&WindowReport>) -> (String, String) {
+        let mut r = Recorder::new(None, 1, 1, &[1], &[], &[]).unwrap();
+        r.on_epoch(e);
+        if let Some(w) = w {
+            r.on_window(w);
+        }
+        (r.digest(), r.dynamics_digest())
+    }
+
+    #[test]
+    fn every_epoch_value_reaches_the_digest_but_not_the_dynamics_digest() {
+        let base = digests(&epoch(0.1), Some(&window(0.3, None)));
+        let next_up = f64::from_bits(0.1f64.to_bits() + 1);
+        let changed = [
+            digests(&epoch(next_up), Some(&window(0.3, None))),
+            digests(&epoch(0.1), Some(&window(-0.3, None))),
+            digests(&epoch(0.1), Some(&window(0.3, Some(vec![0.004])))),
+            digests(&epoch(0.1), None),
+        ];
+        for (i, c) in changed.iter().enumerate() {
+            assert_ne!(c.0, base.0, "change {i}");
+            assert_eq!(c.1, base.1, "change {i}: the dynamics digest has no epochs");
+        }
+        let mut taus = epoch(0.1);
+        taus.taus[0].1 = 0.006;
+        assert_ne!(digests(&taus, Some(&window(0.3, None))).0, base.0);
+    }
 }

@@ -167,19 +167,49 @@ fn bad_checkpoints_are_clear_errors() {
     let bytes = std::fs::read(&cp).unwrap();
     let mut foreign = bytes.clone();
     foreign[16..20].copy_from_slice(&99u32.to_le_bytes());
-    let cases: [(&str, Vec<u8>, &str); 3] = [
+    let mut extended = bytes.clone();
+    extended.push(0);
+    let mut cases: Vec<(String, Vec<u8>, &str)> = vec![
         (
-            "truncated",
+            "truncated".into(),
             bytes[..bytes.len() / 2].to_vec(),
             "corrupted or truncated",
         ),
-        ("foreign", foreign, "version 99"),
         (
-            "other",
+            "header_only".into(),
+            bytes[..30].to_vec(),
+            "corrupted or truncated",
+        ),
+        ("extended".into(), extended, "corrupted or truncated"),
+        ("foreign".into(), foreign, "version 99"),
+        (
+            "other".into(),
             b"{\"hello\": 1}".to_vec(),
             "not a dsmcosim checkpoint",
         ),
+        ("empty".into(), Vec::new(), "not a dsmcosim checkpoint"),
     ];
+    // One flipped bit anywhere: the magic, the version, the body hash, the first body
+    // byte, a quarter, the middle, three quarters in, and the last byte.
+    let n = bytes.len();
+    let flips = [
+        (5, "not a dsmcosim checkpoint"),
+        (17, "cannot be read by this binary"),
+        (20, "corrupted or truncated"),
+        (51, "corrupted or truncated"),
+        (52, "corrupted or truncated"),
+        (n / 4, "corrupted or truncated"),
+        (n / 2, "corrupted or truncated"),
+        (3 * n / 4, "corrupted or truncated"),
+        (n - 1, "corrupted or truncated"),
+    ];
+    for (at, want) in flips {
+        for bit in [0, 7] {
+            let mut flipped = bytes.clone();
+            flipped[at] ^= 1 << bit;
+            cases.push((format!("flip_{at}_{bit}"), flipped, want));
+        }
+    }
     for (name, body, want) in cases {
         let p = dir.join(format!("{name}.ckpt"));
         std::fs::write(&p, body).unwrap();
@@ -191,9 +221,25 @@ fn bad_checkpoints_are_clear_errors() {
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{name}: {err}");
         assert!(err.contains(want), "{name}: {err:?} must say {want:?}");
+        assert_eq!(
+            err.trim_end().lines().count(),
+            1,
+            "{name}: one line: {err:?}"
+        );
+        assert!(
+            err.contains(p.to_str().unwrap()),
+            "{name}: {err:?} must name the file"
+        );
         assert!(
             !dir.join(format!("out_{name}")).exists(),
             "{name}: nothing written"
         );
     }
+    // The untouched checkpoint still resumes.
+    let o = Command::new(env!("CARGO_BIN_EXE_dsmcosim"))
+        .args(["resume", cp.to_str().unwrap(), "--out"])
+        .arg(dir.join("out_good"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }

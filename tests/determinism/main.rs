@@ -1,34 +1,86 @@
 //! Same digest whatever may vary between two runs of the same scenario with the same
 //! binary: a second run, the rayon thread count, a fork of the world mid-run, and (while
-//! no randomness is configured) the seed. Issue 6, item 4, for what exists today; the
-//! TDMA and DSM scenarios and resume from a checkpoint join these as they land.
+//! no randomness is configured) the seed. Issue 6, item 4; resume from a checkpoint is
+//! in `tests/checkpoint`.
 //!
-//! Every test runs the shipped scenarios to their end (30 s monolithic; the partitioned
-//! thesis runs diverge at 23.991 s, which is their stored result) and compares the
-//! digest of every step, through the same [`Recorder`] `dsmcosim run` uses.
+//! The scenarios: the shipped monolithic, fixed-delay and TDMA (drift and jitter) runs
+//! to their end (30 s monolithic; the partitioned thesis runs diverge at 23.991 s, which
+//! is their stored result), and the shipped ideal-channel DSM run cut to 4 s, with its
+//! grid search (forks on rayon), no-optimization, Nelder–Mead and DSM ± δ baselines.
+//! Every test compares the digest of every step, TDMA cycle and epoch row, through the
+//! same [`Recorder`] and the same controller loop `dsmcosim run` uses.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use dsmcosim::control::experiment::Controller;
 use dsmcosim::cosim::CoSim;
 use dsmcosim::kernel::SimTime;
 use dsmcosim::scenario::Scenario;
 use dsmcosim::trace::Recorder;
+use serde_json::{json, Value};
 
-/// One monolithic, one partitioned (4 nodes, space distribution, τ = 5 ms) and one
-/// TDMA scenario (the same on a TDMA network with clock drift, random walk, sync error
-/// and jitter).
-const SCENARIOS: [&str; 3] = [
-    "grid16_monolithic",
-    "grid16_space_fixed",
-    "tdma4_space_fixed",
+/// A scenario under test: a shipped scenario file, possibly cut short.
+#[derive(Clone, Copy)]
+struct Case {
+    /// Name in messages and scratch directories.
+    name: &'static str,
+    /// The shipped `scenarios/<file>.json`.
+    file: &'static str,
+    /// Cut the run to this duration (and its surface window into it) [s].
+    duration: Option<f64>,
+    /// Where the fork test forks the world [ns]; a controlled run forks at the first
+    /// window boundary at or after each.
+    forks: [u64; 3],
+}
+
+/// 1 ms: right after the first step; 5.0005 s: mid-window, mid-τ; 12 s: a window
+/// boundary where body 16's load starts.
+const LONG_FORKS: [u64; 3] = [1_000_000, 5_000_500_000, 12_000_000_000];
+
+/// One monolithic, one partitioned (4 nodes, space distribution, τ = 5 ms), one TDMA
+/// scenario (the same on a TDMA network with clock drift, random walk, sync error and
+/// jitter) and one DSM-controlled scenario on ideal channels.
+const SCENARIOS: [Case; 4] = [
+    Case {
+        name: "grid16_monolithic",
+        file: "grid16_monolithic",
+        duration: None,
+        forks: LONG_FORKS,
+    },
+    Case {
+        name: "grid16_space_fixed",
+        file: "grid16_space_fixed",
+        duration: None,
+        forks: LONG_FORKS,
+    },
+    Case {
+        name: "tdma4_space_fixed",
+        file: "tdma4_space_fixed",
+        duration: None,
+        forks: LONG_FORKS,
+    },
+    Case {
+        name: "grid16_space_cp_ds2_4s",
+        file: "grid16_space_cp_ds2",
+        duration: Some(4.0),
+        // Forks at 1 s (after the first window), 2 s and 3 s.
+        forks: [1_000_000, 1_500_500_000, 3_000_000_000],
+    },
 ];
 
-/// The scenarios that configure no random source.
-const NOT_RANDOM: [&str; 3] = [
-    "grid16_monolithic",
-    "grid16_space_fixed",
-    "grid16_time_fixed",
+/// The scenarios that configure no random source: the monolithic, fixed-delay and DSM
+/// cases above, and the time-distributed fixed-delay run.
+const NOT_RANDOM: [Case; 4] = [
+    SCENARIOS[0],
+    SCENARIOS[1],
+    SCENARIOS[3],
+    Case {
+        name: "grid16_time_fixed",
+        file: "grid16_time_fixed",
+        duration: None,
+        forks: LONG_FORKS,
+    },
 ];
 
 fn repo() -> PathBuf {
@@ -39,8 +91,37 @@ fn scenario_file(name: &str) -> PathBuf {
     repo().join("scenarios").join(format!("{name}.json"))
 }
 
-fn load(name: &str) -> Scenario {
-    dsmcosim::scenario::load(&scenario_file(name)).unwrap_or_else(|e| panic!("{name}: {e}"))
+impl Case {
+    /// The scenario file's JSON, cut short when the case says so.
+    fn json(&self) -> Value {
+        let text = std::fs::read_to_string(scenario_file(self.file))
+            .unwrap_or_else(|e| panic!("{}: {e}", self.file));
+        let mut v: Value = serde_json::from_str(&text).expect("json");
+        if let Some(d) = self.duration {
+            v["duration"] = json!(d);
+            if v["controller"].get("surface_window").is_some() {
+                v["controller"]["surface_window"] = json!(d / 2.0);
+            }
+        }
+        v
+    }
+
+    fn load(&self) -> Scenario {
+        dsmcosim::scenario::parse_str(&self.json().to_string(), self.name)
+            .unwrap_or_else(|e| panic!("{}: {e}", self.name))
+    }
+
+    /// A scenario file for the binary: the shipped one, or the cut one written into
+    /// `dir`.
+    fn path(&self, dir: &Path) -> PathBuf {
+        if self.duration.is_none() {
+            return scenario_file(self.file);
+        }
+        std::fs::create_dir_all(dir).expect("scratch dir");
+        let p = dir.join(format!("{}.json", self.name));
+        std::fs::write(&p, self.json().to_string()).expect("write scenario");
+        p
+    }
 }
 
 /// A recorder that only digests (no trace file), configured as `run` configures it.
@@ -57,19 +138,55 @@ fn recorder(s: &Scenario) -> Recorder {
     .expect("no file, no I/O")
 }
 
-/// How a run ended: its digest and, for a diverged run, the error.
+/// How a run ended: its digests and, for a diverged run, the error.
 #[derive(Debug, PartialEq)]
 struct End {
     digest: String,
+    dynamics_digest: String,
     steps: u64,
     error: Option<String>,
 }
 
-fn finish(world: &mut CoSim, rec: &mut Recorder) -> End {
-    let error = world.run_to_end(rec).err().map(|e| e.to_string());
+/// A run in progress: the world and, on a controlled scenario, its controller.
+#[derive(Clone)]
+struct Live {
+    world: CoSim,
+    controller: Option<Controller>,
+}
+
+impl Live {
+    fn new(s: &Scenario) -> Live {
+        Live {
+            world: CoSim::new(s),
+            controller: Controller::new(s).expect("controller settings"),
+        }
+    }
+
+    /// Runs to `t` (controlled: every window that starts before `t`), as `run` drives.
+    fn advance(&mut self, t: SimTime, obs: &mut dyn dsmcosim::cosim::Observer) {
+        let r = match &mut self.controller {
+            Some(c) => c.run_until(&mut self.world, obs, t),
+            None => self.world.advance_to(t, obs),
+        };
+        r.unwrap_or_else(|e| panic!("{e}"));
+    }
+
+    /// Runs to the end, as `run` drives.
+    fn run_to_end(&mut self, obs: &mut dyn dsmcosim::cosim::Observer) -> dsmcosim::Result<()> {
+        let end = self.world.scenario().duration;
+        if let Some(c) = &mut self.controller {
+            c.run_until(&mut self.world, obs, end)?;
+        }
+        self.world.run_to_end(obs)
+    }
+}
+
+fn finish(live: &mut Live, rec: &mut Recorder) -> End {
+    let error = live.run_to_end(rec).err().map(|e| e.to_string());
     End {
         digest: rec.digest(),
-        steps: world.steps_done(),
+        dynamics_digest: rec.dynamics_digest(),
+        steps: live.world.steps_done(),
         error,
     }
 }
@@ -77,37 +194,34 @@ fn finish(world: &mut CoSim, rec: &mut Recorder) -> End {
 /// The scenario run from start to end in-process.
 fn digest(s: &Scenario) -> End {
     let mut rec = recorder(s);
-    finish(&mut CoSim::new(s), &mut rec)
+    finish(&mut Live::new(s), &mut rec)
 }
 
 #[test]
 fn two_runs_give_the_same_digest() {
-    for name in SCENARIOS {
-        let s = load(name);
+    for case in &SCENARIOS {
+        let (name, s) = (case.name, case.load());
         let (a, b) = (digest(&s), digest(&s));
         assert_eq!(a, b, "{name}: two runs differ");
         assert!(a.steps > 1000, "{name}: ran only {} steps", a.steps);
     }
 }
 
-/// The forked world (a `Clone` after `advance_to`) continues exactly as the unforked
-/// run would have, while the original is driven on independently.
+/// The forked world (a `Clone` after `advance_to`, with its controller) continues
+/// exactly as the unforked run would have, while the original is driven on
+/// independently.
 #[test]
 fn a_forked_world_finishes_with_the_unforked_digest() {
-    for name in SCENARIOS {
-        let s = load(name);
+    for case in &SCENARIOS {
+        let (name, s) = (case.name, case.load());
         let whole = digest(&s);
-        // 1 ms: right after the first step; 5.0005 s: mid-window, mid-τ; 12 s: a
-        // window boundary where body 16's load starts.
-        for fork_at in [1_000_000, 5_000_500_000, 12_000_000_000] {
-            let mut world = CoSim::new(&s);
+        for fork_at in case.forks {
+            let mut live = Live::new(&s);
             let mut rec = recorder(&s);
-            world
-                .advance_to(SimTime(fork_at), &mut rec)
-                .unwrap_or_else(|e| panic!("{name}: {e}"));
-            let mut fork = world.clone();
+            live.advance(SimTime(fork_at), &mut rec);
+            let mut fork = live.clone();
             // The original runs on first; the fork must not see any of it.
-            let _ = world.run_to_end(&mut ());
+            let _ = live.run_to_end(&mut ());
             let forked = finish(&mut fork, &mut rec);
             assert_eq!(
                 forked,
@@ -122,8 +236,8 @@ fn a_forked_world_finishes_with_the_unforked_digest() {
 /// Without a random source the seed must not reach the trace.
 #[test]
 fn a_changed_seed_changes_nothing_without_randomness() {
-    for name in NOT_RANDOM {
-        let s = load(name);
+    for case in &NOT_RANDOM {
+        let (name, s) = (case.name, case.load());
         let base = digest(&s);
         for seed in [s.seed.wrapping_add(1), 0, u64::MAX] {
             let mut t = s.clone();
@@ -156,17 +270,23 @@ fn run_binary(scenario: &Path, out: &Path, threads: &str) -> String {
         .digest
 }
 
-/// Parallel work must merge in a fixed order (SPEC section 6), so the thread count
-/// cannot matter. Nothing in a single run uses rayon yet; this guards the day it does.
+/// Parallel work (the controller's grid search and baselines on forks) must merge in a
+/// fixed order (SPEC section 6), so the thread count cannot matter; the uncontrolled
+/// runs use no rayon, and must not start to depend on it.
 #[test]
 fn rayon_thread_count_does_not_change_the_digest() {
     let scratch = Path::new(env!("CARGO_TARGET_TMPDIR")).join("determinism");
-    for name in SCENARIOS {
-        let file = scenario_file(name);
+    for case in &SCENARIOS {
+        let name = case.name;
+        let file = case.path(&scratch);
         let one = run_binary(&file, &scratch.join(format!("{name}-1")), "1");
         let two = run_binary(&file, &scratch.join(format!("{name}-2")), "2");
         assert_eq!(one, two, "{name}: RAYON_NUM_THREADS=1 and 2 differ");
-        assert_eq!(one, digest(&load(name)).digest, "{name}: binary vs library");
+        assert_eq!(
+            one,
+            digest(&case.load()).digest,
+            "{name}: binary vs library"
+        );
     }
 }
 
@@ -174,7 +294,7 @@ fn rayon_thread_count_does_not_change_the_digest() {
 /// source of the same scene set to zero it does not, and nothing is drawn.
 #[test]
 fn a_changed_seed_changes_the_run_only_where_randomness_is_configured() {
-    let s = load("tdma4_space_fixed");
+    let s = SCENARIOS[2].load();
     let base = digest(&s);
     let mut other = s.clone();
     other.seed = s.seed + 1;
