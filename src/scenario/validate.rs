@@ -80,16 +80,18 @@ pub fn parse_file(text: &str, file_label: &str) -> Result<ScenarioFile> {
     let mut de = serde_json::Deserializer::from_str(text);
     let file: ScenarioFile = serde_path_to_error::deserialize(&mut de).map_err(|e| {
         let path = e.path().to_string();
-        serde_error(e.inner(), &path, file_label)
+        serde_error(e.inner(), &path, file_label, text)
     })?;
     // Anything but whitespace after the top-level object is a syntax error.
-    de.end().map_err(|e| serde_error(&e, ".", file_label))?;
+    de.end()
+        .map_err(|e| serde_error(&e, ".", file_label, text))?;
     Ok(file)
 }
 
 /// Maps a serde_json error at field `path` (serde_path_to_error's form; `.` = the top
-/// level) to a one-line [`Error`].
-fn serde_error(err: &serde_json::Error, path: &str, file_label: &str) -> Error {
+/// level) to a one-line [`Error`]; `text` is the parsed source, from which a syntax
+/// error quotes the offending token (`NaN`, `Infinity`, `1e999`, …).
+fn serde_error(err: &serde_json::Error, path: &str, file_label: &str, text: &str) -> Error {
     let (line, column) = (err.line(), err.column());
     // serde_json's Display appends " at line L column C"; keep only the message.
     let full = err.to_string();
@@ -106,16 +108,44 @@ fn serde_error(err: &serde_json::Error, path: &str, file_label: &str) -> Error {
             path: path.unwrap_or_else(|| "top level".to_string()),
             message: format!("{message} (line {line}, column {column})"),
         },
-        Category::Syntax | Category::Eof | Category::Io => Error::Parse {
-            file: one_line(file_label),
-            message: match path {
-                Some(path) => format!("{message} (in `{path}`)"),
+        Category::Syntax | Category::Eof | Category::Io => {
+            let token = token_at(text, line, column);
+            let message = match token.as_deref() {
+                Some(t @ ("NaN" | "Infinity" | "-Infinity" | "inf" | "-inf" | "nan")) => {
+                    format!("{message}: got `{t}`, and JSON numbers must be finite")
+                }
+                Some(t) if message.starts_with("number out of range") => {
+                    format!("{message}: got `{t}`, beyond the largest finite f64")
+                }
+                Some(t) => format!("{message} (got `{t}`)"),
                 None => message,
-            },
-            line,
-            column,
-        },
+            };
+            Error::Parse {
+                file: one_line(file_label),
+                message: match path {
+                    Some(path) => format!("{message} (in `{path}`)"),
+                    None => message,
+                },
+                line,
+                column,
+            }
+        }
     }
+}
+
+/// The word-like token (letters, digits, `+ - .`) around 1-based `line`/`column` of
+/// `text`, where serde_json reports a syntax error (at its start or its end).
+fn token_at(text: &str, line: usize, column: usize) -> Option<String> {
+    let chars: Vec<char> = text.lines().nth(line.checked_sub(1)?)?.chars().collect();
+    let word = |c: char| c.is_ascii_alphanumeric() || matches!(c, '+' | '-' | '.');
+    let at = column.checked_sub(1)?.min(chars.len().checked_sub(1)?);
+    if !word(chars[at]) {
+        return None;
+    }
+    let start = (0..=at).rev().take_while(|&i| word(chars[i])).last()?;
+    let end = (at..chars.len()).take_while(|&i| word(chars[i])).last()?;
+    let token: String = chars[start..=end].iter().collect();
+    (token.chars().count() <= 40).then_some(token)
 }
 
 /// Escapes control characters (a key may contain an escaped newline) so that every

@@ -251,18 +251,27 @@ fn non_finite_numbers_are_rejected() {
             .to_string()
             .replace("\"mass\":1,", &format!("\"mass\":{v},"))
     };
+    // The message quotes the bad value as written.
     parse_error(
         &text("1e999"),
         "model.bodies[0].mass",
-        "number out of range",
+        "number out of range: got `1e999`",
     );
     parse_error(
         &text("-1e999"),
         "model.bodies[0].mass",
-        "number out of range",
+        "number out of range: got `-1e999`",
     );
-    parse_error(&text("NaN"), "model.bodies[0].mass", "expected value");
-    parse_error(&text("Infinity"), "model.bodies[0].mass", "expected value");
+    parse_error(
+        &text("NaN"),
+        "model.bodies[0].mass",
+        "got `NaN`, and JSON numbers must be finite",
+    );
+    parse_error(
+        &text("Infinity"),
+        "model.bodies[0].mass",
+        "got `Infinity`, and JSON numbers must be finite",
+    );
     let text = base()
         .to_string()
         .replace("\"duration\":2.0", "\"duration\":1e400");
