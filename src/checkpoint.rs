@@ -25,7 +25,7 @@ use crate::trace::Recorder;
 pub const MAGIC: &[u8; 16] = b"DSMCOSIM-CKPT\0\0\0";
 /// The checkpoint layout version this binary reads and writes; bumped whenever any
 /// serialized type changes.
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
 
 /// A run's complete state.
 #[derive(serde::Serialize, serde::Deserialize)]
