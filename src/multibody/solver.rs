@@ -229,10 +229,17 @@ impl Exact {
         // Construction cannot fail: offsets are monotone and rows sorted within a column.
         let pattern = SparsityPattern::try_from_offsets_and_indices(m, m, offsets, indices)
             .expect("ok: pattern built sorted and in range");
+        let dense = m <= DENSE_MAX_LINKS;
         let mut entries = Vec::new();
         for (body, inc) in incident.iter().enumerate() {
             for &(k, sk) in inc {
                 for &(l, sl) in inc {
+                    // The dense factorization reads only the lower triangle (row k ≥
+                    // column l); the other entries would be computed for nothing. Each
+                    // kept entry still receives its contributions in the same order.
+                    if dense && k < l {
+                        continue;
+                    }
                     let sign = if sk == sl { 1.0 } else { -1.0 };
                     entries.push(Entry {
                         body,
@@ -241,11 +248,7 @@ impl Exact {
                         sign,
                         side_k: sk,
                         side_l: sl,
-                        value: if m <= DENSE_MAX_LINKS {
-                            k * m + l
-                        } else {
-                            slots[&(l, k)]
-                        },
+                        value: if dense { k * m + l } else { slots[&(l, k)] },
                     });
                 }
             }
@@ -256,7 +259,7 @@ impl Exact {
             values: vec![0.0; n_values],
             factor: None,
             rhs: DVector::zeros(m),
-            dense: (m <= DENSE_MAX_LINKS).then(|| vec![0.0; m * m]),
+            dense: dense.then(|| vec![0.0; m * m]),
         }
     }
 
@@ -331,38 +334,43 @@ impl Exact {
     }
 }
 
-/// Solves `A x = b` for symmetric positive definite `A` (row-major, `m × m`) by an
-/// in-place Cholesky factorization `A = L Lᵀ` (lower triangle overwritten by `L`).
+/// Solves `A x = b` for symmetric positive definite `A` (row-major, `m × m`, only the
+/// lower triangle read) by an in-place Cholesky factorization `A = L Lᵀ` (lower
+/// triangle overwritten by `L`). The forward substitution `L y = b` runs inside the
+/// factorization, row `j` as soon as row `j` of `L` is complete: an independent chain
+/// of operations for the processor to overlap with the factorization's, each value
+/// still computed by the same operations in the same order. On an error `x` holds
+/// partial results.
 fn dense_cholesky_solve(a: &mut [f64], b: &[f64], x: &mut [f64]) -> Result<(), SolveError> {
     let m = b.len();
+    let (a, x) = (&mut a[..m * m], &mut x[..m]);
     let max_diag = (0..m).map(|i| a[i * m + i]).fold(0.0, f64::max);
     for j in 0..m {
-        let mut d = a[j * m + j];
-        for k in 0..j {
-            d -= a[j * m + k] * a[j * m + k];
+        let (row_j, below) = a[j * m..].split_at_mut(m);
+        let mut d = row_j[j];
+        for &l in &row_j[..j] {
+            d -= l * l;
         }
         // Singular to working precision (see SINGULAR_PIVOT), or not a number.
         if d.is_nan() || d <= SINGULAR_PIVOT * max_diag {
             return Err(SolveError::NotPositiveDefinite);
         }
         let d = d.sqrt();
-        a[j * m + j] = d;
-        for i in j + 1..m {
-            let mut s = a[i * m + j];
-            for k in 0..j {
-                s -= a[i * m + k] * a[j * m + k];
+        row_j[j] = d;
+        for row_i in below.chunks_exact_mut(m) {
+            let mut s = row_i[j];
+            for (&lik, &ljk) in row_i[..j].iter().zip(&row_j[..j]) {
+                s -= lik * ljk;
             }
-            a[i * m + j] = s / d;
+            row_i[j] = s / d;
         }
-    }
-    // L y = b, then Lᵀ x = y.
-    for i in 0..m {
-        let mut s = b[i];
-        for k in 0..i {
-            s -= a[i * m + k] * x[k];
+        let mut s = b[j];
+        for (&ljk, &yk) in row_j[..j].iter().zip(&x[..j]) {
+            s -= ljk * yk;
         }
-        x[i] = s / a[i * m + i];
+        x[j] = s / d;
     }
+    // Lᵀ x = y.
     for i in (0..m).rev() {
         let mut s = x[i];
         for k in i + 1..m {
