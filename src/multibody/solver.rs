@@ -150,6 +150,20 @@ impl JsSolver {
         Ok(())
     }
 
+    /// Whether the solve is the dense exact one (a small system), which
+    /// [`dense_cholesky_solve_batch`] can run interleaved with other systems' solves.
+    pub(crate) fn is_dense(&self) -> bool {
+        self.exact.as_ref().is_some_and(|e| e.dense.is_some())
+    }
+
+    /// On the dense exact path: assembles `A` at this geometry and returns it (row-major)
+    /// for [`dense_cholesky_solve_batch`]; `solve` does both in one call.
+    pub(crate) fn assemble_dense(&mut self, geo: &Geometry, mass: &MassData) -> Option<&mut [f64]> {
+        let exact = self.exact.as_mut().filter(|e| e.dense.is_some())?;
+        exact.assemble(geo, mass);
+        exact.dense.as_deref_mut()
+    }
+
     /// `y = J M⁻¹ Jᵀ x`, matrix-free: scatter `Jᵀ x` to the bodies, scale by `M⁻¹`,
     /// gather `J` per link. The definition of `A`; the solves use assembled forms.
     pub fn apply(&mut self, geo: &Geometry, mass: &MassData, x: &[f64], y: &mut [f64]) {
@@ -263,13 +277,8 @@ impl Exact {
         }
     }
 
-    fn solve(
-        &mut self,
-        geo: &Geometry,
-        mass: &MassData,
-        b: &[f64],
-        x: &mut [f64],
-    ) -> Result<(), SolveError> {
+    /// Fills the values of `A` (the dense matrix on small systems) at this geometry.
+    fn assemble(&mut self, geo: &Geometry, mass: &MassData) {
         let values = self.dense.as_mut().unwrap_or(&mut self.values);
         values.fill(0.0);
         let rigid = !geo.ca.is_empty();
@@ -284,6 +293,16 @@ impl Exact {
             }
             values[e.value] += e.sign * v;
         }
+    }
+
+    fn solve(
+        &mut self,
+        geo: &Geometry,
+        mass: &MassData,
+        b: &[f64],
+        x: &mut [f64],
+    ) -> Result<(), SolveError> {
+        self.assemble(geo, mass);
         if let Some(a) = &mut self.dense {
             return dense_cholesky_solve(a, b, x);
         }
@@ -343,41 +362,120 @@ impl Exact {
 /// partial results.
 fn dense_cholesky_solve(a: &mut [f64], b: &[f64], x: &mut [f64]) -> Result<(), SolveError> {
     let m = b.len();
-    let (a, x) = (&mut a[..m * m], &mut x[..m]);
-    let max_diag = (0..m).map(|i| a[i * m + i]).fold(0.0, f64::max);
+    let max_diag = max_diagonal(a, m);
     for j in 0..m {
-        let (row_j, below) = a[j * m..].split_at_mut(m);
-        let mut d = row_j[j];
-        for &l in &row_j[..j] {
-            d -= l * l;
-        }
-        // Singular to working precision (see SINGULAR_PIVOT), or not a number.
-        if d.is_nan() || d <= SINGULAR_PIVOT * max_diag {
-            return Err(SolveError::NotPositiveDefinite);
-        }
-        let d = d.sqrt();
-        row_j[j] = d;
-        for row_i in below.chunks_exact_mut(m) {
-            let mut s = row_i[j];
-            for (&lik, &ljk) in row_i[..j].iter().zip(&row_j[..j]) {
-                s -= lik * ljk;
-            }
-            row_i[j] = s / d;
-        }
-        let mut s = b[j];
-        for (&ljk, &yk) in row_j[..j].iter().zip(&x[..j]) {
-            s -= ljk * yk;
-        }
-        x[j] = s / d;
+        cholesky_column(a, b, x, j, max_diag)?;
     }
-    // Lᵀ x = y.
     for i in (0..m).rev() {
-        let mut s = x[i];
-        for k in i + 1..m {
-            s -= a[k * m + i] * x[k];
-        }
-        x[i] = s / a[i * m + i];
+        back_substitute(a, x, i);
     }
+    finite(x)
+}
+
+/// One dense solve of a batch: `A` (row-major, assembled), `b`, the solution `x` and
+/// the outcome.
+pub(crate) struct DenseProblem<'a> {
+    /// `A`, overwritten by its factor.
+    pub a: &'a mut [f64],
+    /// Right-hand side.
+    pub b: &'a [f64],
+    /// Solution.
+    pub x: &'a mut [f64],
+    /// Outcome (`Ok` until a step fails).
+    pub result: Result<(), SolveError>,
+}
+
+/// Runs [`dense_cholesky_solve`] on several independent systems, interleaved: column `j`
+/// of every factorization, then the next column, and the back substitutions row by
+/// row. Each system's values come from the same operations in the same order as a
+/// solve on its own (bit-identical); the interleaving only gives the processor
+/// independent chains of square roots and divisions to overlap, where one small
+/// system is a single chain of dependent latencies.
+pub(crate) fn dense_cholesky_solve_batch(problems: &mut [Option<DenseProblem<'_>>]) {
+    let size = |p: &DenseProblem| p.b.len();
+    let max_m = problems.iter().flatten().map(size).max().unwrap_or(0);
+    let mut max_diag = [0.0; BATCH];
+    for (d, p) in max_diag.iter_mut().zip(problems.iter()) {
+        if let Some(p) = p {
+            *d = max_diagonal(p.a, size(p));
+        }
+    }
+    for j in 0..max_m {
+        for (p, &d) in problems.iter_mut().zip(&max_diag) {
+            if let Some(p) = p.as_mut().filter(|p| p.result.is_ok() && j < size(p)) {
+                p.result = cholesky_column(p.a, p.b, p.x, j, d);
+            }
+        }
+    }
+    for step in 0..max_m {
+        for p in problems.iter_mut() {
+            if let Some(p) = p.as_mut().filter(|p| p.result.is_ok() && step < size(p)) {
+                let i = size(p) - 1 - step;
+                back_substitute(p.a, p.x, i);
+            }
+        }
+    }
+    for p in problems.iter_mut().flatten() {
+        if p.result.is_ok() {
+            p.result = finite(p.x);
+        }
+    }
+}
+
+/// Most systems a batch holds (a partitioned run interleaves this many nodes' solves).
+pub(crate) const BATCH: usize = 4;
+
+fn max_diagonal(a: &[f64], m: usize) -> f64 {
+    (0..m).map(|i| a[i * m + i]).fold(0.0, f64::max)
+}
+
+/// Column `j` of the factorization (`a` holds columns `< j` of `L`), then row `j` of
+/// the forward substitution into `x`.
+fn cholesky_column(
+    a: &mut [f64],
+    b: &[f64],
+    x: &mut [f64],
+    j: usize,
+    max_diag: f64,
+) -> Result<(), SolveError> {
+    let m = b.len();
+    let (row_j, below) = a[j * m..m * m].split_at_mut(m);
+    let mut d = row_j[j];
+    for &l in &row_j[..j] {
+        d -= l * l;
+    }
+    // Singular to working precision (see SINGULAR_PIVOT), or not a number.
+    if d.is_nan() || d <= SINGULAR_PIVOT * max_diag {
+        return Err(SolveError::NotPositiveDefinite);
+    }
+    let d = d.sqrt();
+    row_j[j] = d;
+    for row_i in below.chunks_exact_mut(m) {
+        let mut s = row_i[j];
+        for (&lik, &ljk) in row_i[..j].iter().zip(&row_j[..j]) {
+            s -= lik * ljk;
+        }
+        row_i[j] = s / d;
+    }
+    let mut s = b[j];
+    for (&ljk, &yk) in row_j[..j].iter().zip(&x[..j]) {
+        s -= ljk * yk;
+    }
+    x[j] = s / d;
+    Ok(())
+}
+
+/// Row `i` of `Lᵀ x = y` (rows `> i` of `x` already solved).
+fn back_substitute(a: &[f64], x: &mut [f64], i: usize) {
+    let m = x.len();
+    let mut s = x[i];
+    for k in i + 1..m {
+        s -= a[k * m + i] * x[k];
+    }
+    x[i] = s / a[i * m + i];
+}
+
+fn finite(x: &[f64]) -> Result<(), SolveError> {
     if x.iter().all(|v| v.is_finite()) {
         Ok(())
     } else {
