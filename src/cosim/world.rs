@@ -9,6 +9,7 @@ use crate::control::CostMeter;
 use crate::error::{Divergence, Error, Place, Result};
 use crate::kernel::{EventClass, Kernel, SimTime};
 use crate::multibody::dynamics::EvalError;
+use crate::multibody::System;
 use crate::network::tdma::{tdma_node, CycleReport, TdmaError};
 use crate::network::{Channel, Message};
 use crate::partition::{Layout, Node};
@@ -557,12 +558,10 @@ impl CoSim {
     fn step(&mut self, t: SimTime, obs: &mut dyn Observer) -> Result<()> {
         let k = self.steps_done;
         let last = k == self.scenario.steps;
-        for n in 0..self.nodes.len() {
-            let node = &mut self.nodes[n];
-            node.system
-                .begin_step(t, &node.state)
-                .map_err(|e| self.eval_error(t, n, e))?;
-        }
+        // The nodes share nothing during a step: their rate evaluations are batched
+        // (results and first error as if evaluated one after another in node order).
+        let nodes = self.nodes.iter_mut().map(|n| (&mut n.system, &n.state));
+        System::begin_steps(t, nodes).map_err(|(n, e)| self.eval_error(t, n, e))?;
         self.gather();
         self.check(t)?;
         let values = StepValues {

@@ -39,6 +39,17 @@ pub fn sat(y: f64) -> f64 {
 impl System {
     /// Evaluates the rates of `state` at time `t` into `out`.
     pub fn rates(&mut self, t: SimTime, state: &State, out: &mut Rates) -> Result<(), EvalError> {
+        self.rates_to_rhs(t, state)?;
+        self.solver
+            .solve(&self.geo, &self.mass, &self.ws.rhs, &mut self.ws.sol)
+            .map_err(EvalError::Solve)?;
+        self.rates_from_solution(state, out);
+        Ok(())
+    }
+
+    /// Stages 1–4 and the right-hand side of the multiplier solve (stage 5 up to the
+    /// solve, which reads `ws.rhs` and writes `ws.sol`).
+    pub(crate) fn rates_to_rhs(&mut self, t: SimTime, state: &State) -> Result<(), EvalError> {
         self.body_frames(state);
         self.body_loads(t, state);
         let smc = matches!(self.stabilizer, Stabilizer::Smc { .. });
@@ -54,19 +65,22 @@ impl System {
                     let alpha_hat = 2.0 * mu * wdd + wd;
                     self.ws.rhs[l] = (-alpha_hat - k * sat(s / epsilon)) / mu2;
                 }
-                self.solver
-                    .solve(&self.geo, &self.mass, &self.ws.rhs, &mut self.ws.sol)
-                    .map_err(EvalError::Solve)?;
-                out.z.copy_from_slice(&self.ws.sol);
             }
             Stabilizer::Baumgarte { alpha, beta } => {
                 for l in 0..self.links.len() {
                     let (w, wd, wdd) = (self.ws.w[l], self.ws.wd[l], self.ws.wdd[l]);
                     self.ws.rhs[l] = -wdd - 2.0 * alpha * wd - beta * beta * w;
                 }
-                self.solver
-                    .solve(&self.geo, &self.mass, &self.ws.rhs, &mut self.ws.sol)
-                    .map_err(EvalError::Solve)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The rest of stage 5 once `ws.sol` holds the multipliers' solution, and the rates.
+    pub(crate) fn rates_from_solution(&mut self, state: &State, out: &mut Rates) {
+        match self.stabilizer {
+            Stabilizer::Smc { .. } => out.z.copy_from_slice(&self.ws.sol),
+            Stabilizer::Baumgarte { .. } => {
                 self.ws.z_alg.copy_from_slice(&self.ws.sol);
                 self.add_multiplier_accelerations();
                 out.z.fill(0.0);
@@ -80,7 +94,6 @@ impl System {
                 *dq = Quaternion::from_imag(*w) * q * 0.5;
             }
         }
-        Ok(())
     }
 
     /// Stage 1: world inertia and its inverse per body.

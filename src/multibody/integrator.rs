@@ -19,6 +19,7 @@
 use nalgebra::Quaternion;
 
 use super::dynamics::EvalError;
+use super::solver::{dense_cholesky_solve_batch, DenseProblem, SolveError, BATCH};
 use super::state::State;
 use super::system::System;
 use crate::kernel::SimTime;
@@ -31,6 +32,84 @@ impl System {
         let r = self.rates(t, state, &mut k1);
         self.k[0] = k1;
         r
+    }
+
+    /// [`begin_step`](Self::begin_step) of several independent systems (the nodes of a
+    /// partitioned run), with the same results and the same first error (index into
+    /// `systems`) as calling it on each in order: the small dense multiplier solves of up
+    /// to [`BATCH`] systems run interleaved ([`dense_cholesky_solve_batch`]).
+    pub fn begin_steps<'a>(
+        t: SimTime,
+        systems: impl IntoIterator<Item = (&'a mut System, &'a State)>,
+    ) -> Result<(), (usize, EvalError)> {
+        let mut systems = systems.into_iter();
+        let mut base = 0;
+        loop {
+            let mut chunk: [Option<(&mut System, &State)>; BATCH] =
+                std::array::from_fn(|_| systems.next());
+            if chunk[0].is_none() {
+                return Ok(());
+            }
+            // Up to the right-hand sides; a failure ends the chunk there (the systems
+            // after it would not have been evaluated).
+            let mut prepared = 0;
+            let mut failed = None;
+            for (sys, state) in chunk.iter_mut().flatten() {
+                if let Err(e) = sys.rates_to_rhs(t, state) {
+                    failed = Some((prepared, e));
+                    break;
+                }
+                prepared += 1;
+            }
+            let mut solve_errors: [Option<SolveError>; BATCH] = Default::default();
+            let mut problems: [Option<DenseProblem>; BATCH] = Default::default();
+            for ((entry, problem), error) in chunk
+                .iter_mut()
+                .take(prepared)
+                .zip(problems.iter_mut())
+                .zip(solve_errors.iter_mut())
+            {
+                let Some((sys, _)) = entry else { continue };
+                let sys: &mut System = sys;
+                if sys.solver.is_dense() {
+                    if let Some(a) = sys.solver.assemble_dense(&sys.geo, &sys.mass) {
+                        *problem = Some(DenseProblem {
+                            a,
+                            b: &sys.ws.rhs,
+                            x: &mut sys.ws.sol,
+                            result: Ok(()),
+                        });
+                    }
+                } else {
+                    *error = sys
+                        .solver
+                        .solve(&sys.geo, &sys.mass, &sys.ws.rhs, &mut sys.ws.sol)
+                        .err();
+                }
+            }
+            dense_cholesky_solve_batch(&mut problems);
+            for (problem, error) in problems.iter().zip(solve_errors.iter_mut()) {
+                if let Some(p) = problem {
+                    *error = p.result.clone().err();
+                }
+            }
+            // The first failure in system order, as sequential calls would report it.
+            let first_solve_error = solve_errors.iter().position(Option::is_some);
+            let done = first_solve_error.unwrap_or(prepared);
+            for (sys, state) in chunk.iter_mut().take(done).flatten() {
+                let mut k1 = std::mem::replace(&mut sys.k[0], empty_rates());
+                sys.rates_from_solution(state, &mut k1);
+                sys.k[0] = k1;
+            }
+            if let Some(i) = first_solve_error {
+                let e = solve_errors[i].take().expect("ok: found above");
+                return Err((base + i, EvalError::Solve(e)));
+            }
+            if let Some((i, e)) = failed {
+                return Err((base + i, e));
+            }
+            base += BATCH;
+        }
     }
 
     /// Completes the step begun by [`begin_step`](Self::begin_step) at the same `t`.

@@ -5,11 +5,15 @@
 //! - the exact path assembles `A` in compressed-column form on a sparsity pattern
 //!   computed once per run and re-factorizes it with a sparse Cholesky
 //!   (`nalgebra-sparse`, symbolic analysis reused via `refactor`);
-//! - the iterative path applies `A` matrix-free (`Jᵀ`, then `M⁻¹`, then `J`: two sweeps
-//!   over links, one over bodies) inside a Jacobi-preconditioned conjugate gradient
+//! - the iterative path ([`cg`]) assembles `A` in compressed-row form on a pattern
+//!   computed once per run and runs a Jacobi-preconditioned conjugate gradient
 //!   warm-started from the previous solution, with a fixed iteration budget.
 //!
 //! Both cost O(links) per product; the CG solve is O(links · iterations).
+//! [`JsSolver::apply`] is the matrix-free product, the definition the tests check both
+//! against.
+
+mod cg;
 
 use std::collections::BTreeMap;
 
@@ -89,34 +93,20 @@ struct Exact {
 /// Systems with at most this many links use the dense in-place Cholesky.
 pub const DENSE_MAX_LINKS: usize = 32;
 
-/// CG scratch.
-#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
-struct Cg {
-    max_iterations: usize,
-    tolerance: f64,
-    r: Vec<f64>,
-    z: Vec<f64>,
-    p: Vec<f64>,
-    ap: Vec<f64>,
-    diag: Vec<f64>,
-}
-
 /// The `J M⁻¹ Jᵀ` solver of a run, with its scratch memory.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct JsSolver {
     exact: Option<Exact>,
-    cg: Option<Cg>,
+    cg: Option<cg::Cg>,
     /// Per-body force accumulator of the matrix-free product.
     f: Vec<Vector3<f64>>,
     /// Per-body torque accumulator (rigid path).
     t: Vec<Vector3<f64>>,
-    last_iterations: usize,
 }
 
 impl JsSolver {
     /// Prepares a solver for `bodies` bodies and links with the given ends.
     pub fn new(kind: Solver, bodies: usize, ends: &[(usize, usize)]) -> JsSolver {
-        let m = ends.len();
         let (exact, cg) = match kind {
             Solver::Cholesky => (Some(Exact::new(bodies, ends)), None),
             Solver::ConjugateGradient {
@@ -124,15 +114,7 @@ impl JsSolver {
                 tolerance,
             } => (
                 None,
-                Some(Cg {
-                    max_iterations,
-                    tolerance,
-                    r: vec![0.0; m],
-                    z: vec![0.0; m],
-                    p: vec![0.0; m],
-                    ap: vec![0.0; m],
-                    diag: vec![0.0; m],
-                }),
+                Some(cg::Cg::new(max_iterations, tolerance, bodies, ends)),
             ),
         };
         JsSolver {
@@ -140,13 +122,12 @@ impl JsSolver {
             cg,
             f: vec![Vector3::zeros(); bodies],
             t: vec![Vector3::zeros(); bodies],
-            last_iterations: 0,
         }
     }
 
     /// Iterations of the last CG solve (0 on the exact path).
     pub fn last_iterations(&self) -> usize {
-        self.last_iterations
+        self.cg.as_ref().map_or(0, cg::Cg::last_iterations)
     }
 
     /// Solves `A x = b`. On entry `x` holds the warm start (used by CG only).
@@ -161,81 +142,30 @@ impl JsSolver {
             return Ok(());
         }
         if let Some(exact) = &mut self.exact {
-            self.last_iterations = 0;
             return exact.solve(geo, mass, b, x);
         }
-        if let Some(mut cg) = self.cg.take() {
-            let result = self.solve_cg(&mut cg, geo, mass, b, x);
-            self.cg = Some(cg);
-            return result;
+        if let Some(cg) = &mut self.cg {
+            return cg.solve(geo, mass, b, x);
         }
         Ok(())
     }
 
-    fn solve_cg(
-        &mut self,
-        cg: &mut Cg,
-        geo: &Geometry,
-        mass: &MassData,
-        b: &[f64],
-        x: &mut [f64],
-    ) -> Result<(), SolveError> {
-        diagonal(geo, mass, &mut cg.diag);
-        let b_norm = dot(b, b).sqrt();
-        self.last_iterations = 0;
-        if b_norm == 0.0 {
-            x.fill(0.0);
-            return Ok(());
-        }
-        self.apply(geo, mass, x, &mut cg.ap);
-        for (i, &bi) in b.iter().enumerate() {
-            cg.r[i] = bi - cg.ap[i];
-            cg.z[i] = precondition(cg.r[i], cg.diag[i]);
-            cg.p[i] = cg.z[i];
-        }
-        let mut rz = dot(&cg.r, &cg.z);
-        let mut rr = dot(&cg.r, &cg.r);
-        let goal = cg.tolerance * b_norm;
-        for it in 0..cg.max_iterations {
-            if rr.sqrt() <= goal {
-                break;
-            }
-            self.apply(geo, mass, &cg.p, &mut cg.ap);
-            let pap = dot(&cg.p, &cg.ap);
-            // A non-positive (or NaN) curvature means A is singular along p: stop
-            // with the best iterate so far and let the robustness term absorb it.
-            if pap.is_nan() || pap <= 0.0 {
-                break;
-            }
-            let alpha = rz / pap;
-            let (mut rz_new, mut rr_new) = (0.0, 0.0);
-            for ((((xi, &pi), ri), zi), (&api, &di)) in x
-                .iter_mut()
-                .zip(&cg.p)
-                .zip(cg.r.iter_mut())
-                .zip(cg.z.iter_mut())
-                .zip(cg.ap.iter().zip(&cg.diag))
-            {
-                *xi += alpha * pi;
-                *ri -= alpha * api;
-                *zi = precondition(*ri, di);
-                rz_new += *ri * *zi;
-                rr_new += *ri * *ri;
-            }
-            let beta = rz_new / rz;
-            rz = rz_new;
-            rr = rr_new;
-            for (p, z) in cg.p.iter_mut().zip(&cg.z) {
-                *p = z + beta * *p;
-            }
-            self.last_iterations = it + 1;
-        }
-        Ok(())
+    /// Whether the solve is the dense exact one (a small system), which
+    /// [`dense_cholesky_solve_batch`] can run interleaved with other systems' solves.
+    pub(crate) fn is_dense(&self) -> bool {
+        self.exact.as_ref().is_some_and(|e| e.dense.is_some())
+    }
+
+    /// On the dense exact path: assembles `A` at this geometry and returns it (row-major)
+    /// for [`dense_cholesky_solve_batch`]; `solve` does both in one call.
+    pub(crate) fn assemble_dense(&mut self, geo: &Geometry, mass: &MassData) -> Option<&mut [f64]> {
+        let exact = self.exact.as_mut().filter(|e| e.dense.is_some())?;
+        exact.assemble(geo, mass);
+        exact.dense.as_deref_mut()
     }
 
     /// `y = J M⁻¹ Jᵀ x`, matrix-free: scatter `Jᵀ x` to the bodies, scale by `M⁻¹`,
-    /// gather `J` per link. (A per-body gather over incidence lists measured no faster
-    /// on the 64×64 grid.)
+    /// gather `J` per link. The definition of `A`; the solves use assembled forms.
     pub fn apply(&mut self, geo: &Geometry, mass: &MassData, x: &[f64], y: &mut [f64]) {
         self.f.fill(Vector3::zeros());
         let rigid = !geo.ca.is_empty();
@@ -264,32 +194,6 @@ impl JsSolver {
         for (k, &(a, b)) in geo.ends.iter().enumerate() {
             y[k] = geo.n[k].dot(&(self.f[a] - self.f[b])) + geo.ca[k].dot(&self.t[a])
                 - geo.cb[k].dot(&self.t[b]);
-        }
-    }
-}
-
-fn precondition(r: f64, d: f64) -> f64 {
-    if d > 0.0 {
-        r / d
-    } else {
-        r
-    }
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-/// Diagonal of `A`: `1/m_a + 1/m_b + c_aᵀ I_a⁻¹ c_a + c_bᵀ I_b⁻¹ c_b` per link.
-fn diagonal(geo: &Geometry, mass: &MassData, d: &mut [f64]) {
-    let im = &mass.inv_mass;
-    for (k, &(a, b)) in geo.ends.iter().enumerate() {
-        d[k] = im[a] + im[b];
-    }
-    if !geo.ca.is_empty() {
-        let ii = &mass.inv_inertia;
-        for (k, &(a, b)) in geo.ends.iter().enumerate() {
-            d[k] += geo.ca[k].dot(&(ii[a] * geo.ca[k])) + geo.cb[k].dot(&(ii[b] * geo.cb[k]));
         }
     }
 }
@@ -339,10 +243,17 @@ impl Exact {
         // Construction cannot fail: offsets are monotone and rows sorted within a column.
         let pattern = SparsityPattern::try_from_offsets_and_indices(m, m, offsets, indices)
             .expect("ok: pattern built sorted and in range");
+        let dense = m <= DENSE_MAX_LINKS;
         let mut entries = Vec::new();
         for (body, inc) in incident.iter().enumerate() {
             for &(k, sk) in inc {
                 for &(l, sl) in inc {
+                    // The dense factorization reads only the lower triangle (row k ≥
+                    // column l); the other entries would be computed for nothing. Each
+                    // kept entry still receives its contributions in the same order.
+                    if dense && k < l {
+                        continue;
+                    }
                     let sign = if sk == sl { 1.0 } else { -1.0 };
                     entries.push(Entry {
                         body,
@@ -351,11 +262,7 @@ impl Exact {
                         sign,
                         side_k: sk,
                         side_l: sl,
-                        value: if m <= DENSE_MAX_LINKS {
-                            k * m + l
-                        } else {
-                            slots[&(l, k)]
-                        },
+                        value: if dense { k * m + l } else { slots[&(l, k)] },
                     });
                 }
             }
@@ -366,17 +273,12 @@ impl Exact {
             values: vec![0.0; n_values],
             factor: None,
             rhs: DVector::zeros(m),
-            dense: (m <= DENSE_MAX_LINKS).then(|| vec![0.0; m * m]),
+            dense: dense.then(|| vec![0.0; m * m]),
         }
     }
 
-    fn solve(
-        &mut self,
-        geo: &Geometry,
-        mass: &MassData,
-        b: &[f64],
-        x: &mut [f64],
-    ) -> Result<(), SolveError> {
+    /// Fills the values of `A` (the dense matrix on small systems) at this geometry.
+    fn assemble(&mut self, geo: &Geometry, mass: &MassData) {
         let values = self.dense.as_mut().unwrap_or(&mut self.values);
         values.fill(0.0);
         let rigid = !geo.ca.is_empty();
@@ -391,6 +293,16 @@ impl Exact {
             }
             values[e.value] += e.sign * v;
         }
+    }
+
+    fn solve(
+        &mut self,
+        geo: &Geometry,
+        mass: &MassData,
+        b: &[f64],
+        x: &mut [f64],
+    ) -> Result<(), SolveError> {
+        self.assemble(geo, mass);
         if let Some(a) = &mut self.dense {
             return dense_cholesky_solve(a, b, x);
         }
@@ -441,45 +353,129 @@ impl Exact {
     }
 }
 
-/// Solves `A x = b` for symmetric positive definite `A` (row-major, `m × m`) by an
-/// in-place Cholesky factorization `A = L Lᵀ` (lower triangle overwritten by `L`).
+/// Solves `A x = b` for symmetric positive definite `A` (row-major, `m × m`, only the
+/// lower triangle read) by an in-place Cholesky factorization `A = L Lᵀ` (lower
+/// triangle overwritten by `L`). The forward substitution `L y = b` runs inside the
+/// factorization, row `j` as soon as row `j` of `L` is complete: an independent chain
+/// of operations for the processor to overlap with the factorization's, each value
+/// still computed by the same operations in the same order. On an error `x` holds
+/// partial results.
 fn dense_cholesky_solve(a: &mut [f64], b: &[f64], x: &mut [f64]) -> Result<(), SolveError> {
     let m = b.len();
-    let max_diag = (0..m).map(|i| a[i * m + i]).fold(0.0, f64::max);
+    let max_diag = max_diagonal(a, m);
     for j in 0..m {
-        let mut d = a[j * m + j];
-        for k in 0..j {
-            d -= a[j * m + k] * a[j * m + k];
-        }
-        // Singular to working precision (see SINGULAR_PIVOT), or not a number.
-        if d.is_nan() || d <= SINGULAR_PIVOT * max_diag {
-            return Err(SolveError::NotPositiveDefinite);
-        }
-        let d = d.sqrt();
-        a[j * m + j] = d;
-        for i in j + 1..m {
-            let mut s = a[i * m + j];
-            for k in 0..j {
-                s -= a[i * m + k] * a[j * m + k];
-            }
-            a[i * m + j] = s / d;
-        }
-    }
-    // L y = b, then Lᵀ x = y.
-    for i in 0..m {
-        let mut s = b[i];
-        for k in 0..i {
-            s -= a[i * m + k] * x[k];
-        }
-        x[i] = s / a[i * m + i];
+        cholesky_column(a, b, x, j, max_diag)?;
     }
     for i in (0..m).rev() {
-        let mut s = x[i];
-        for k in i + 1..m {
-            s -= a[k * m + i] * x[k];
-        }
-        x[i] = s / a[i * m + i];
+        back_substitute(a, x, i);
     }
+    finite(x)
+}
+
+/// One dense solve of a batch: `A` (row-major, assembled), `b`, the solution `x` and
+/// the outcome.
+pub(crate) struct DenseProblem<'a> {
+    /// `A`, overwritten by its factor.
+    pub a: &'a mut [f64],
+    /// Right-hand side.
+    pub b: &'a [f64],
+    /// Solution.
+    pub x: &'a mut [f64],
+    /// Outcome (`Ok` until a step fails).
+    pub result: Result<(), SolveError>,
+}
+
+/// Runs [`dense_cholesky_solve`] on several independent systems, interleaved: column `j`
+/// of every factorization, then the next column, and the back substitutions row by
+/// row. Each system's values come from the same operations in the same order as a
+/// solve on its own (bit-identical); the interleaving only gives the processor
+/// independent chains of square roots and divisions to overlap, where one small
+/// system is a single chain of dependent latencies.
+pub(crate) fn dense_cholesky_solve_batch(problems: &mut [Option<DenseProblem<'_>>]) {
+    let size = |p: &DenseProblem| p.b.len();
+    let max_m = problems.iter().flatten().map(size).max().unwrap_or(0);
+    let mut max_diag = [0.0; BATCH];
+    for (d, p) in max_diag.iter_mut().zip(problems.iter()) {
+        if let Some(p) = p {
+            *d = max_diagonal(p.a, size(p));
+        }
+    }
+    for j in 0..max_m {
+        for (p, &d) in problems.iter_mut().zip(&max_diag) {
+            if let Some(p) = p.as_mut().filter(|p| p.result.is_ok() && j < size(p)) {
+                p.result = cholesky_column(p.a, p.b, p.x, j, d);
+            }
+        }
+    }
+    for step in 0..max_m {
+        for p in problems.iter_mut() {
+            if let Some(p) = p.as_mut().filter(|p| p.result.is_ok() && step < size(p)) {
+                let i = size(p) - 1 - step;
+                back_substitute(p.a, p.x, i);
+            }
+        }
+    }
+    for p in problems.iter_mut().flatten() {
+        if p.result.is_ok() {
+            p.result = finite(p.x);
+        }
+    }
+}
+
+/// Most systems a batch holds (a partitioned run interleaves this many nodes' solves).
+pub(crate) const BATCH: usize = 4;
+
+fn max_diagonal(a: &[f64], m: usize) -> f64 {
+    (0..m).map(|i| a[i * m + i]).fold(0.0, f64::max)
+}
+
+/// Column `j` of the factorization (`a` holds columns `< j` of `L`), then row `j` of
+/// the forward substitution into `x`.
+fn cholesky_column(
+    a: &mut [f64],
+    b: &[f64],
+    x: &mut [f64],
+    j: usize,
+    max_diag: f64,
+) -> Result<(), SolveError> {
+    let m = b.len();
+    let (row_j, below) = a[j * m..m * m].split_at_mut(m);
+    let mut d = row_j[j];
+    for &l in &row_j[..j] {
+        d -= l * l;
+    }
+    // Singular to working precision (see SINGULAR_PIVOT), or not a number.
+    if d.is_nan() || d <= SINGULAR_PIVOT * max_diag {
+        return Err(SolveError::NotPositiveDefinite);
+    }
+    let d = d.sqrt();
+    row_j[j] = d;
+    for row_i in below.chunks_exact_mut(m) {
+        let mut s = row_i[j];
+        for (&lik, &ljk) in row_i[..j].iter().zip(&row_j[..j]) {
+            s -= lik * ljk;
+        }
+        row_i[j] = s / d;
+    }
+    let mut s = b[j];
+    for (&ljk, &yk) in row_j[..j].iter().zip(&x[..j]) {
+        s -= ljk * yk;
+    }
+    x[j] = s / d;
+    Ok(())
+}
+
+/// Row `i` of `Lᵀ x = y` (rows `> i` of `x` already solved).
+fn back_substitute(a: &[f64], x: &mut [f64], i: usize) {
+    let m = x.len();
+    let mut s = x[i];
+    for k in i + 1..m {
+        s -= a[k * m + i] * x[k];
+    }
+    x[i] = s / a[i * m + i];
+}
+
+fn finite(x: &[f64]) -> Result<(), SolveError> {
     if x.iter().all(|v| v.is_finite()) {
         Ok(())
     } else {
@@ -568,6 +564,40 @@ mod tests {
                 y[k],
                 want[k]
             );
+        }
+    }
+
+    #[test]
+    fn assembled_cg_matrix_matches_the_matrix_free_product() {
+        let (rigid, _) = scene();
+        let (point, point_mass) = {
+            let (mut g, m) = scene();
+            g.ca.clear();
+            g.cb.clear();
+            (g, m)
+        };
+        for (geo, mass) in [(rigid, scene().1), (point, point_mass)] {
+            let kind = Solver::ConjugateGradient {
+                max_iterations: 1,
+                tolerance: 0.0,
+            };
+            let mut s = JsSolver::new(kind, 4, &geo.ends);
+            let mut sol = [0.0; 4];
+            s.solve(&geo, &mass, &[1.0, 2.0, 3.0, 4.0], &mut sol)
+                .unwrap();
+            let x = [0.3, -1.2, 0.7, 2.0];
+            let (mut want, mut got) = ([0.0; 4], [0.0; 4]);
+            s.apply(&geo, &mass, &x, &mut want);
+            s.cg.as_ref().unwrap().apply(&x, &mut got);
+            for k in 0..4 {
+                assert!(
+                    (got[k] - want[k]).abs() < 1e-12,
+                    "rigid {}, row {k}: {} vs {}",
+                    !geo.ca.is_empty(),
+                    got[k],
+                    want[k]
+                );
+            }
         }
     }
 
