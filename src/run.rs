@@ -216,13 +216,13 @@ fn write_epochs(out: &Path, world: &CoSim, exp: &Experiment) -> Result<()> {
 }
 
 /// `digest_algorithm` in summary.json: the records of the chain, in order.
-const DIGEST_ALGORITHM: &str = "BLAKE3 chain d_(k+1) = BLAKE3(d_k, record_k) from 32 zero \
-bytes over the run's records in kernel event order: every step (t [ns], the bits of w, f, \
-p, v), every TDMA cycle (start, then per frame slot, sender, start, delivery [ns]), and \
-every epochs.csv row when its window closes (t_start, t_end [ns], the bits of each \
-channel's requested and achieved tau, bandwidth, cost; then, on a controlled run, the \
-bits of each objective, the grid optimum's count and bits, the measurement count). \
-dynamics_digest: the same chain over the step and TDMA cycle records only. See \
+const DIGEST_ALGORITHM: &str = "BLAKE3(dynamics || epochs) of two BLAKE3 chains \
+d_(k+1) = BLAKE3(d_k, record_k) from 32 zero bytes, each in kernel event order. dynamics: \
+every step (t [ns], the bits of w, f, p, v) and every TDMA cycle (start, then per frame \
+slot, sender, start, delivery [ns]); epochs: every epochs.csv row when its window closes \
+(t_start, t_end [ns], the bits of each channel's requested and achieved tau, bandwidth, \
+cost; then, on a controlled run, the bits of each objective, the grid optimum's count and \
+bits, the measurement count). dynamics_digest: the dynamics chain alone. See \
 dsmcosim::trace::digest";
 
 fn write_summary(

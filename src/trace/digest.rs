@@ -1,10 +1,11 @@
 //! The run digest: BLAKE3 over the exact bytes of every recorded value, chained record
 //! by record.
 //!
-//! A run's records, in the order the kernel produces them (at equal time: measurement
-//! < controller < TDMA cycle < slot < sample < delivery < partition step, see
-//! [`crate::kernel::EventClass`]), so records of the four kinds below interleave in
-//! time order:
+//! A run's records come in two chains, each in the order the kernel produces its
+//! records (at equal time: measurement < controller < TDMA cycle < slot < sample <
+//! delivery < partition step, see [`crate::kernel::EventClass`]).
+//!
+//! The **dynamics chain** holds, interleaved in time order:
 //!
 //! 1. **Step** — for every step k = 0..=steps: the time `t_k` as a little-endian `u64`
 //!    count of nanoseconds, then the `f64` bit patterns (little-endian) of every link's
@@ -15,26 +16,29 @@
 //!    the cycle's start [ns], then per frame in slot order its slot, sender, actual start
 //!    [ns] and delivery [ns] (`u64::MAX` if lost), each a little-endian `u64` — so the
 //!    digest pins every frame's timing, which network.csv reports.
+//!
+//! The **epoch chain** holds, window after window:
+//!
 //! 3. **Epoch row, world columns** — when a measurement window closes (its
-//!    `Measurement` event at `t_end`, before the step at `t_end`): `t_start` and `t_end` [ns] as
-//!    `u64`, then per channel (channel order) the bits of `tau_<c>_requested` and
-//!    `tau_<c>_achieved` [s], then `bandwidth` and `cost`.
+//!    `Measurement` event at `t_end`, before the step at `t_end`): `t_start` and `t_end`
+//!    [ns] as `u64`, then per channel (channel order) the bits of `tau_<c>_requested`
+//!    and `tau_<c>_achieved` [s], then `bandwidth` and `cost`.
 //! 4. **Epoch row, controller columns** — on a controlled run, right after the live
 //!    world closed the window and the controller recorded it: the bits of
 //!    `objective_<method>`, then of each baseline's objective (column order), then the
 //!    number of `grid_opt_tau_*` values as a `u64` (0 when the grid was not searched in
 //!    this window) and their bits, then `measurements` as a `u64`.
 //!
-//! The digest is the chain `d_{k+1} = BLAKE3(d_k ‖ record_k)` from `d_0` = 32 zero
-//! bytes over all these records, printed as 64 hex digits (`digest` in summary.json).
-//! So a change in any value of trace.csv (at any step), network.csv or epochs.csv
-//! changes it. Chaining keeps the whole state of the digest in 32 bytes, so a checkpoint
-//! can store it and a resumed run continues the very same chain.
+//! Each chain is `d_{k+1} = BLAKE3(d_k ‖ record_k)` from `d_0` = 32 zero bytes. The
+//! run's `digest` (summary.json, 64 hex digits) is `BLAKE3(dynamics ‖ epochs)` of the two
+//! final chain values, so a change in any value of trace.csv (at any step), network.csv
+//! or epochs.csv changes it, while every step is hashed once. Chaining keeps each
+//! chain's whole state in 32 bytes, so a checkpoint can store it and a resumed run
+//! continues the very same chains.
 //!
-//! `dynamics_digest` in summary.json is the same chain over the step and TDMA cycle
-//! records only: the live dynamics, which a controller's forks never touch, so it is
-//! equal for a controlled run and the same run without baselines (and equal to the
-//! `digest` this crate reported before epoch rows were hashed).
+//! `dynamics_digest` in summary.json is the dynamics chain alone: the live dynamics,
+//! which a controller's forks never touch, so it is equal for a controlled run and the
+//! same run without baselines.
 //!
 //! Column names, decimation, traced-body selection and number formatting are not
 //! hashed, so changing the output options never changes the digest; `-0.0` and `0.0`
@@ -81,6 +85,24 @@ impl Digest {
         self.record.clear();
     }
 
+    /// The chain value (an open record counts as closed).
+    pub fn bytes(&self) -> [u8; 32] {
+        if self.record.is_empty() {
+            self.chain
+        } else {
+            self.folded()
+        }
+    }
+
+    /// `BLAKE3(a ‖ b)` of two chains' values, as 64 lowercase hex digits: the run digest
+    /// of a dynamics chain `a` and an epoch chain `b`.
+    pub fn combined_hex(a: &Digest, b: &Digest) -> String {
+        let mut h = blake3::Hasher::new();
+        h.update(&a.bytes());
+        h.update(&b.bytes());
+        hex(h.finalize().as_bytes())
+    }
+
     fn folded(&self) -> [u8; 32] {
         let mut h = blake3::Hasher::new();
         h.update(&self.chain);
@@ -90,13 +112,12 @@ impl Digest {
 
     /// The digest as 64 lowercase hex digits (an open record counts as closed).
     pub fn hex(&self) -> String {
-        let bytes = if self.record.is_empty() {
-            self.chain
-        } else {
-            self.folded()
-        };
-        bytes.iter().map(|b| format!("{b:02x}")).collect()
+        hex(&self.bytes())
     }
+}
+
+fn hex(bytes: &[u8; 32]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
 }
 
 #[cfg(test)]

@@ -31,9 +31,10 @@ pub struct Recorder {
     line: String,
     /// Every trace line written so far, kept when checkpoints are written.
     kept: Option<String>,
-    /// Every step, TDMA cycle and epoch row: the run's digest.
-    digest: Digest,
-    /// Steps and TDMA cycles only: the live dynamics, whatever is measured beside them.
+    /// The epoch chain: every epochs.csv row (see [`super::digest`]).
+    epochs: Digest,
+    /// The dynamics chain: steps and TDMA cycles, the live dynamics whatever is measured
+    /// beside them.
     dynamics: Digest,
     max_violation: f64,
     rows: u64,
@@ -64,7 +65,7 @@ impl Recorder {
             file,
             line: String::new(),
             kept: None,
-            digest: Digest::new(),
+            epochs: Digest::new(),
             dynamics: Digest::new(),
             max_violation: 0.0,
             rows: 0,
@@ -99,18 +100,17 @@ impl Recorder {
 
     /// Records one step: digest always, CSV row and plot samples when the step is kept.
     pub fn record(&mut self, s: &StepValues) -> std::io::Result<()> {
-        for d in [&mut self.digest, &mut self.dynamics] {
-            d.time(s.time.as_nanos());
-            d.values(s.w);
-            d.values(s.f);
-            for p in s.p {
-                d.values(p.as_slice());
-            }
-            for v in s.v {
-                d.values(v.as_slice());
-            }
-            d.end_step();
+        let d = &mut self.dynamics;
+        d.time(s.time.as_nanos());
+        d.values(s.w);
+        d.values(s.f);
+        for p in s.p {
+            d.values(p.as_slice());
         }
+        for v in s.v {
+            d.values(v.as_slice());
+        }
+        d.end_step();
         for &w in s.w {
             self.max_violation = self.max_violation.max(w.abs());
         }
@@ -152,14 +152,14 @@ impl Recorder {
         file.write_all(self.line.as_bytes())
     }
 
-    /// The digest so far (hex): every step, TDMA cycle and epoch row.
+    /// The run digest so far (hex): both chains, so every step, TDMA cycle and epoch row.
     pub fn digest(&self) -> String {
-        self.digest.hex()
+        Digest::combined_hex(&self.dynamics, &self.epochs)
     }
 
-    /// The dynamics digest so far (hex): the same chain over the step and TDMA cycle
-    /// records only, so that it is equal for two runs of the same live dynamics whatever
-    /// they measured beside it (a controller's baselines, grid search, forks).
+    /// The dynamics digest so far (hex): the chain over the step and TDMA cycle records
+    /// only, so that it is equal for two runs of the same live dynamics whatever they
+    /// measured beside it (a controller's baselines, grid search, forks).
     pub fn dynamics_digest(&self) -> String {
         self.dynamics.hex()
     }
@@ -256,28 +256,28 @@ impl Observer for Recorder {
         self.record(values)
     }
 
-    /// A TDMA cycle: its record goes into both digest chains (see [`super::digest`])
+    /// A TDMA cycle: its record goes into the dynamics chain (see [`super::digest`])
     /// and its frames into network.csv.
     fn on_cycle(&mut self, report: &CycleReport) -> std::io::Result<()> {
-        for d in [&mut self.digest, &mut self.dynamics] {
-            d.time(report.start.as_nanos());
-            for f in &report.frames {
-                d.count(f.slot as u64);
-                d.count(f.sender as u64);
-                d.time(f.start.as_nanos());
-                d.time(f.delivery.map_or(u64::MAX, |d| d.as_nanos()));
-            }
-            d.end_step();
+        let d = &mut self.dynamics;
+        d.time(report.start.as_nanos());
+        for f in &report.frames {
+            d.count(f.slot as u64);
+            d.count(f.sender as u64);
+            d.time(f.start.as_nanos());
+            d.time(f.delivery.map_or(u64::MAX, |d| d.as_nanos()));
         }
+        d.end_step();
         match &mut self.network {
             Some(n) => n.record(report),
             None => Ok(()),
         }
     }
 
-    /// A closed window: the world's columns of its epochs.csv row go into the digest.
+    /// A closed window: the world's columns of its epochs.csv row go into the epoch
+    /// chain.
     fn on_epoch(&mut self, e: &EpochRecord) {
-        let d = &mut self.digest;
+        let d = &mut self.epochs;
         d.time(e.t_start.as_nanos());
         d.time(e.t_end.as_nanos());
         for &(requested, achieved) in &e.taus {
@@ -288,9 +288,9 @@ impl Observer for Recorder {
     }
 
     /// A window the controller ran: the controller's columns of its epochs.csv row go
-    /// into the digest.
+    /// into the epoch chain.
     fn on_window(&mut self, w: &WindowReport) {
-        let d = &mut self.digest;
+        let d = &mut self.epochs;
         d.value(w.live.objective);
         for b in &w.baselines {
             d.value(b.candidate.objective);
