@@ -2,11 +2,11 @@
 
 use crate::network::Message;
 
-/// What happens at an event.
+/// What happens at a queued event. The lock-step itself (class `PartitionStep`) is not
+/// queued: `CoSim` keeps the one pending step beside the queue and runs it exactly
+/// where the kernel would pop it (see `CoSim::next_step`).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Event {
-    /// All nodes step from the event's time (class `PartitionStep`).
-    Step,
     /// Channel `channel` samples its routes (class `Sample`).
     Sample {
         /// Channel index.

@@ -102,6 +102,13 @@ pub struct CoSim {
     p: Vec<Vector3<f64>>,
     v: Vec<Vector3<f64>>,
     steps_done: u64,
+    /// The next lock-step, the one pending event of class `PartitionStep`. It is kept
+    /// beside the queue rather than in it: nothing else has that class, so it runs when
+    /// no queued event is at or before its time, exactly where the kernel would pop it,
+    /// and the commonest event of every run costs no heap push and pop.
+    next_step: Option<SimTime>,
+    /// Time of the last processed event (queued or step).
+    now: SimTime,
     messages: u64,
     events: u64,
     max_violation: f64,
@@ -164,12 +171,6 @@ impl CoSim {
                 Some(Box::new(link))
             }
         };
-        schedule(
-            &mut kernel,
-            SimTime::ZERO,
-            EventClass::PartitionStep,
-            Event::Step,
-        );
         let first_window = scenario.measurement_period.min(scenario.duration);
         schedule(
             &mut kernel,
@@ -194,6 +195,8 @@ impl CoSim {
             p: vec![Vector3::zeros(); nb],
             v: vec![Vector3::zeros(); nb],
             steps_done: 0,
+            next_step: Some(SimTime::ZERO),
+            now: SimTime::ZERO,
             messages: 0,
             events: 0,
             max_violation: 0.0,
@@ -257,7 +260,7 @@ impl CoSim {
 
     /// Time of the last processed event.
     pub fn now(&self) -> SimTime {
-        self.kernel.now()
+        self.now
     }
 
     /// Whether every event up to the end of the run has been processed.
@@ -336,8 +339,8 @@ impl CoSim {
     /// Processes every event before `t`, and the measurement events at `t` (so the
     /// window ending at `t` is closed and a controller can decide at `t`).
     pub fn advance_to(&mut self, t: SimTime, obs: &mut dyn Observer) -> Result<()> {
-        while let Some(key) = self.kernel.peek() {
-            if key.time > t || (key.time == t && key.class > EventClass::Measurement) {
+        while let Some((time, class)) = self.next_key() {
+            if time > t || (time == t && class > EventClass::Measurement) {
                 break;
             }
             self.next_event(obs)?;
@@ -347,20 +350,45 @@ impl CoSim {
 
     /// Processes every remaining event: the run to its end.
     pub fn run_to_end(&mut self, obs: &mut dyn Observer) -> Result<()> {
-        while !self.kernel.is_empty() && !self.finished() {
+        while self.next_key().is_some() && !self.finished() {
             self.next_event(obs)?;
         }
         Ok(())
     }
 
+    /// Whether the pending step comes before the queue's first event: the step's
+    /// class, `PartitionStep`, is the last and no queued event has it, so the step goes
+    /// first exactly when every queued event is later.
+    fn step_is_next(&self) -> Option<SimTime> {
+        let ts = self.next_step?;
+        match self.kernel.peek() {
+            Some(key) if key.time <= ts => None,
+            _ => Some(ts),
+        }
+    }
+
+    /// `(time, class)` of the next event, queued or step.
+    fn next_key(&self) -> Option<(SimTime, EventClass)> {
+        match self.step_is_next() {
+            Some(ts) => Some((ts, EventClass::PartitionStep)),
+            None => self.kernel.peek().map(|k| (k.time, k.class)),
+        }
+    }
+
     fn next_event(&mut self, obs: &mut dyn Observer) -> Result<()> {
+        if let Some(ts) = self.step_is_next() {
+            self.next_step = None;
+            self.events += 1;
+            self.now = ts;
+            return self.step(ts, obs);
+        }
         let Some((key, event)) = self.kernel.pop() else {
             return Ok(());
         };
         self.events += 1;
         let t = key.time;
+        self.now = t;
         match event {
-            Event::Step => self.step(t, obs),
             Event::Sample { channel } => {
                 self.sample(t, channel);
                 Ok(())
@@ -560,8 +588,15 @@ impl CoSim {
         let last = k == self.scenario.steps;
         // The nodes share nothing during a step: their rate evaluations are batched
         // (results and first error as if evaluated one after another in node order).
-        let nodes = self.nodes.iter_mut().map(|n| (&mut n.system, &n.state));
-        System::begin_steps(t, nodes).map_err(|(n, e)| self.eval_error(t, n, e))?;
+        if let [node] = self.nodes.as_mut_slice() {
+            // One node (a monolithic scene): nothing to batch.
+            node.system
+                .begin_step(t, &node.state)
+                .map_err(|e| self.eval_error(t, 0, e))?;
+        } else {
+            let nodes = self.nodes.iter_mut().map(|n| (&mut n.system, &n.state));
+            System::begin_steps(t, nodes).map_err(|(n, e)| self.eval_error(t, n, e))?;
+        }
         self.gather();
         self.check(t)?;
         let values = StepValues {
@@ -587,11 +622,7 @@ impl CoSim {
                 .map_err(|e| self.eval_error(t, n, e))?;
             self.nodes[n].restore_held_ghosts();
         }
-        self.schedule(
-            SimTime(t.0 + self.scenario.dt.0),
-            EventClass::PartitionStep,
-            Event::Step,
-        );
+        self.next_step = Some(SimTime(t.0 + self.scenario.dt.0));
         Ok(())
     }
 
