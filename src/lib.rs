@@ -39,7 +39,9 @@
 //! controller is not itself a queued event: the driver (`control::experiment`) advances
 //! the kernel with `CoSim::advance_to(t)`, which stops right after the `Measurement`
 //! events at `t`, decides, and lets the kernel go on — exactly the `Controller` slot of
-//! the order. Nothing that reaches a trace depends on hash-map order, the thread count
+//! the order. Likewise the one pending lock-step waits beside the queue rather than in
+//! it (`PartitionStep` is the last class and no other event has it, so it runs exactly
+//! where the queue would pop it). Nothing that reaches a trace depends on hash-map order, the thread count
 //! or the wall clock; every random source is its own seeded ChaCha stream.
 
 #![warn(missing_docs)]

@@ -37,7 +37,7 @@ impl System {
     /// [`begin_step`](Self::begin_step) of several independent systems (the nodes of a
     /// partitioned run), with the same results and the same first error (index into
     /// `systems`) as calling it on each in order: the small dense multiplier solves of up
-    /// to [`BATCH`] systems run interleaved ([`dense_cholesky_solve_batch`]).
+    /// to `BATCH` systems run interleaved (`dense_cholesky_solve_batch`).
     pub fn begin_steps<'a>(
         t: SimTime,
         systems: impl IntoIterator<Item = (&'a mut System, &'a State)>,

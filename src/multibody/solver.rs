@@ -5,7 +5,7 @@
 //! - the exact path assembles `A` in compressed-column form on a sparsity pattern
 //!   computed once per run and re-factorizes it with a sparse Cholesky
 //!   (`nalgebra-sparse`, symbolic analysis reused via `refactor`);
-//! - the iterative path ([`cg`]) assembles `A` in compressed-row form on a pattern
+//! - the iterative path (`solver::cg`) assembles `A` in compressed-row form on a pattern
 //!   computed once per run and runs a Jacobi-preconditioned conjugate gradient
 //!   warm-started from the previous solution, with a fixed iteration budget.
 //!
