@@ -310,9 +310,16 @@ impl Controller {
             if surface_here {
                 exp.surface = grid.clone().map(|g| (t, g));
             }
-            let taus = delays
-                .taus(&live_x)
-                .expect("ok: every method picks feasible delays");
+            // Every method picks a feasible point (DSM and Nelder–Mead only ask feasible
+            // ones, the grid holds only feasible ones, `initial` is validated); rounding
+            // at a bound is the one way left to miss, and it is an error, not a panic.
+            let taus = delays.taus(&live_x).ok_or_else(|| Error::Numerical {
+                time: t,
+                message: format!(
+                    "the {} choice {live_x:?} [s] is outside the delay bounds or the budget",
+                    spec.method.name()
+                ),
+            })?;
             let achieved = world
                 .set_taus(t, &taus, &delays.achieved(&taus))
                 .map_err(|e| crate::error::Error::Numerical {
