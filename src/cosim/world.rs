@@ -588,15 +588,8 @@ impl CoSim {
         let last = k == self.scenario.steps;
         // The nodes share nothing during a step: their rate evaluations are batched
         // (results and first error as if evaluated one after another in node order).
-        if let [node] = self.nodes.as_mut_slice() {
-            // One node (a monolithic scene): nothing to batch.
-            node.system
-                .begin_step(t, &node.state)
-                .map_err(|e| self.eval_error(t, 0, e))?;
-        } else {
-            let nodes = self.nodes.iter_mut().map(|n| (&mut n.system, &n.state));
-            System::begin_steps(t, nodes).map_err(|(n, e)| self.eval_error(t, n, e))?;
-        }
+        let nodes = self.nodes.iter_mut().map(|n| (&mut n.system, &n.state));
+        System::begin_steps(t, nodes).map_err(|(n, e)| self.eval_error(t, n, e))?;
         self.gather();
         self.check(t)?;
         let values = StepValues {

@@ -47,8 +47,14 @@ impl System {
         loop {
             let mut chunk: [Option<(&mut System, &State)>; BATCH] =
                 std::array::from_fn(|_| systems.next());
-            if chunk[0].is_none() {
-                return Ok(());
+            match &mut chunk {
+                [None, ..] => return Ok(()),
+                // A lone system (a monolithic run, or the last of several): nothing to
+                // interleave, so the plain evaluation, without the batch bookkeeping.
+                [Some((sys, state)), None, ..] => {
+                    return sys.begin_step(t, state).map_err(|e| (base, e));
+                }
+                _ => {}
             }
             // Up to the right-hand sides; a failure ends the chunk there (the systems
             // after it would not have been evaluated).
@@ -94,15 +100,17 @@ impl System {
                 }
             }
             // The first failure in system order, as sequential calls would report it.
-            let first_solve_error = solve_errors.iter().position(Option::is_some);
-            let done = first_solve_error.unwrap_or(prepared);
+            let first_solve_error = solve_errors
+                .iter_mut()
+                .enumerate()
+                .find_map(|(i, e)| e.take().map(|e| (i, e)));
+            let done = first_solve_error.as_ref().map_or(prepared, |&(i, _)| i);
             for (sys, state) in chunk.iter_mut().take(done).flatten() {
                 let mut k1 = std::mem::replace(&mut sys.k[0], empty_rates());
                 sys.rates_from_solution(state, &mut k1);
                 sys.k[0] = k1;
             }
-            if let Some(i) = first_solve_error {
-                let e = solve_errors[i].take().expect("ok: found above");
+            if let Some((i, e)) = first_solve_error {
                 return Err((base + i, EvalError::Solve(e)));
             }
             if let Some((i, e)) = failed {
