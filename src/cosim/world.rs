@@ -107,8 +107,6 @@ pub struct CoSim {
     /// no queued event is at or before its time, exactly where the kernel would pop it,
     /// and the commonest event of every run costs no heap push and pop.
     next_step: Option<SimTime>,
-    /// Time of the last processed event (queued or step).
-    now: SimTime,
     messages: u64,
     events: u64,
     max_violation: f64,
@@ -196,7 +194,6 @@ impl CoSim {
             v: vec![Vector3::zeros(); nb],
             steps_done: 0,
             next_step: Some(SimTime::ZERO),
-            now: SimTime::ZERO,
             messages: 0,
             events: 0,
             max_violation: 0.0,
@@ -260,7 +257,9 @@ impl CoSim {
 
     /// Time of the last processed event.
     pub fn now(&self) -> SimTime {
-        self.now
+        // The later of the last queued event and the last step (steps are not queued).
+        let last_step = SimTime(self.steps_done.saturating_sub(1) * self.scenario.dt.0);
+        self.kernel.now().max(last_step)
     }
 
     /// Whether every event up to the end of the run has been processed.
@@ -379,7 +378,6 @@ impl CoSim {
         if let Some(ts) = self.step_is_next() {
             self.next_step = None;
             self.events += 1;
-            self.now = ts;
             return self.step(ts, obs);
         }
         let Some((key, event)) = self.kernel.pop() else {
@@ -387,7 +385,6 @@ impl CoSim {
         };
         self.events += 1;
         let t = key.time;
-        self.now = t;
         match event {
             Event::Sample { channel } => {
                 self.sample(t, channel);

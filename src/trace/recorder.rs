@@ -36,7 +36,6 @@ pub struct Recorder {
     /// The dynamics chain: steps and TDMA cycles, the live dynamics whatever is measured
     /// beside them.
     dynamics: Digest,
-    max_violation: f64,
     rows: u64,
     times: Vec<f64>,
     link_series: Vec<Vec<f64>>,
@@ -67,7 +66,6 @@ impl Recorder {
             kept: None,
             epochs: Digest::new(),
             dynamics: Digest::new(),
-            max_violation: 0.0,
             rows: 0,
             times: Vec::new(),
             link_series: vec![Vec::new(); link_count.min(MAX_PLOTTED_LINKS + 1)],
@@ -111,9 +109,6 @@ impl Recorder {
             d.values(v.as_slice());
         }
         d.end_step();
-        for &w in s.w {
-            self.max_violation = self.max_violation.max(w.abs());
-        }
         if s.step % self.decimation != 0 && !s.last {
             return Ok(());
         }
@@ -162,11 +157,6 @@ impl Recorder {
     /// measured beside it (a controller's baselines, grid search, forks).
     pub fn dynamics_digest(&self) -> String {
         self.dynamics.hex()
-    }
-
-    /// Largest `|w|` recorded so far [m].
-    pub fn max_violation(&self) -> f64 {
-        self.max_violation
     }
 
     /// Rows written to the trace.
