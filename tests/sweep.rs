@@ -67,8 +67,10 @@ fn ok(args: &[&dyn AsRef<std::ffi::OsStr>]) -> String {
         .unwrap();
     assert!(
         out.status.success(),
-        "dsmcosim {:?} failed: {}",
+        "dsmcosim {:?} failed: {}\n--- stdout ---\n{}\n--- stderr ---\n{}",
         args.iter().map(|a| a.as_ref()).collect::<Vec<_>>(),
+        out.status,
+        String::from_utf8_lossy(&out.stdout),
         String::from_utf8_lossy(&out.stderr)
     );
     String::from_utf8(out.stdout).unwrap()

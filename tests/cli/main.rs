@@ -5,6 +5,8 @@ use std::process::{Command, Output};
 
 use serde_json::{json, Value};
 
+mod contract;
+
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_dsmcosim"))
 }
@@ -31,6 +33,16 @@ fn run(args: &[&str]) -> Output {
     bin().args(args).output().expect("spawn dsmcosim")
 }
 
+/// What a finished process said, for assertion messages: exit status, stdout, stderr.
+fn said(o: &Output) -> String {
+    format!(
+        "{}\n--- stdout ---\n{}\n--- stderr ---\n{}",
+        o.status,
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
 fn short_grid() -> Value {
     json!({
         "name": "short_grid", "seed": 7, "duration": 2.0, "dt": 0.001,
@@ -51,12 +63,7 @@ fn shipped_scenarios_validate() {
         let p = entry.expect("entry").path();
         if p.extension().is_some_and(|e| e == "json") {
             let out = run(&["validate", p.to_str().expect("utf-8 path")]);
-            assert!(
-                out.status.success(),
-                "{}: {}",
-                p.display(),
-                String::from_utf8_lossy(&out.stderr)
-            );
+            assert!(out.status.success(), "{}: {}", p.display(), said(&out));
         }
     }
 }
@@ -73,7 +80,7 @@ fn run_writes_the_output_contract_and_is_deterministic() {
             "--out",
             out.to_str().unwrap(),
         ]);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        assert!(o.status.success(), "{}", said(&o));
         assert!(o.stderr.is_empty(), "a short run is quiet on stderr");
     }
     let (sa, sb) = (summary(&a), summary(&b));
@@ -87,19 +94,33 @@ fn run_writes_the_output_contract_and_is_deterministic() {
         std::fs::read(a.join("trace.csv")).unwrap(),
         std::fs::read(b.join("trace.csv")).unwrap()
     );
-    // SPEC section 8, checked by the shared contract checker.
-    let checker = repo().join("../shared/contract-check");
-    let o = Command::new("python3")
-        .arg(&checker)
-        .arg(&a)
-        .output()
-        .expect("python3 runs ../shared/contract-check");
-    assert!(
-        o.status.success(),
-        "contract-check: {}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let breaches = contract::problems(&a);
+    assert!(breaches.is_empty(), "output contract: {breaches:#?}");
+    // The check itself catches breaches: a summary without its digest, a trace with a
+    // non-number, a plot that is not XML.
+    let broken = dir.join("broken");
+    std::fs::create_dir_all(&broken).unwrap();
+    for e in std::fs::read_dir(&a).unwrap() {
+        let p = e.unwrap().path();
+        std::fs::copy(&p, broken.join(p.file_name().unwrap())).unwrap();
+    }
+    let mut s = summary(&a);
+    s.as_object_mut().unwrap().remove("digest");
+    write_json(&broken, "summary.json", &s);
+    let trace = std::fs::read_to_string(a.join("trace.csv")).unwrap();
+    std::fs::write(
+        broken.join("trace.csv"),
+        trace.replacen("\n0,", "\nNaN,", 1),
+    )
+    .unwrap();
+    std::fs::write(broken.join("bodies.svg"), "<svg><text>t [s]</svg>").unwrap();
+    let breaches = contract::problems(&broken).join("\n");
+    for want in ["'digest'", "trace.csv row 2, column t", "bodies.svg"] {
+        assert!(
+            breaches.contains(want),
+            "{want} is reported in:\n{breaches}"
+        );
+    }
     // Trace columns: t, w_L1..w_L24, f_L1..f_L24, 6 per body.
     let trace = std::fs::read_to_string(a.join("trace.csv")).unwrap();
     let head: Vec<&str> = trace.lines().next().unwrap().split(',').collect();
@@ -147,7 +168,7 @@ fn decimation_and_traced_bodies_do_not_change_the_digest() {
             "--out",
             dir.join(o).to_str().unwrap(),
         ]);
-        assert!(out.status.success());
+        assert!(out.status.success(), "{}", said(&out));
     }
     assert_eq!(
         summary(&dir.join("ra"))["digest"],
@@ -272,7 +293,7 @@ fn divergence_exits_3_names_time_node_and_link_and_keeps_the_trace() {
 #[test]
 fn every_subcommand_has_help() {
     let top = run(&["--help"]);
-    assert!(top.status.success());
+    assert!(top.status.success(), "{}", said(&top));
     let listing = String::from_utf8_lossy(&top.stdout).into_owned();
     let subcommands = [
         "validate",
@@ -287,7 +308,7 @@ fn every_subcommand_has_help() {
     for sub in subcommands {
         assert!(listing.contains(sub), "`--help` lists `{sub}`");
         let o = run(&[sub, "--help"]);
-        assert!(o.status.success(), "{sub} --help");
+        assert!(o.status.success(), "{sub} --help: {}", said(&o));
         let text = String::from_utf8_lossy(&o.stdout);
         assert!(
             text.contains("Usage") && text.contains(sub),
@@ -312,13 +333,9 @@ fn a_tdma_run_writes_the_network_outputs() {
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let o = Command::new("python3")
-        .arg(repo().join("../shared/contract-check"))
-        .arg(&out)
-        .output()
-        .expect("python3 runs ../shared/contract-check");
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stdout));
+    assert!(o.status.success(), "{}", said(&o));
+    let breaches = contract::problems(&out);
+    assert!(breaches.is_empty(), "output contract: {breaches:#?}");
     let s: Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(s["network"]["kind"], json!("tdma"));
@@ -340,4 +357,39 @@ fn a_tdma_run_writes_the_network_outputs() {
     ));
     let timeline = std::fs::read_to_string(out.join("timeline.svg")).unwrap();
     assert!(timeline.contains("TDMA slot timeline") && timeline.contains("time t [ms]"));
+}
+
+#[test]
+fn a_controlled_run_writes_the_output_contract() {
+    let dir = scratch("controlled_outputs");
+    let text = std::fs::read_to_string(repo().join("scenarios/grid16_space_cp.json"))
+        .expect("shipped scenario");
+    let mut v: Value = serde_json::from_str(&text).expect("json");
+    v["duration"] = json!(2.0);
+    v["controller"]["baselines"] = json!(["grid", "no_opt"]);
+    v["controller"]["grid_step"] = json!(0.004);
+    v["controller"]["surface_window"] = json!(1.0);
+    let file = write_json(&dir, "cp.json", &v);
+    let out = dir.join("out");
+    let o = run(&[
+        "run",
+        file.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        matches!(o.status.code(), Some(0) | Some(3)),
+        "a finished or diverged run still writes its outputs: {}",
+        said(&o)
+    );
+    let breaches = contract::problems(&out);
+    assert!(breaches.is_empty(), "output contract: {breaches:#?}");
+    let s = summary(&out);
+    for key in ["mean_cost_dsm", "mean_cost_grid", "mean_cost_no_opt"] {
+        assert!(s.get(key).is_some(), "summary.json has {key}");
+    }
+    assert!(
+        out.join("surface.svg").exists(),
+        "the surface of window 1 s"
+    );
 }

@@ -1,0 +1,284 @@
+//! The output contract of `dsmcosim run SCENARIO --out DIR`, checked field by field.
+//!
+//! What a run directory must hold (README "Output files"):
+//! - `summary.json`: `scenario`, `seed`, `digest` (64 hex digits), `steps`, `sim_seconds`,
+//!   `wall_seconds`, `max_constraint_violation`, `mean_cost`; on a controlled run also
+//!   `mean_cost_<method>` for every method with an objective column in epochs.csv;
+//! - `trace.csv`: `t`, then `w_L<k>` and `f_L<k>` for every link `k = 1..links`, then
+//!   `px_B<i>,py_B<i>,pz_B<i>,vx_B<i>,vy_B<i>,vz_B<i>` per traced body; every value a
+//!   finite number, every row as wide as the header, `t` increasing;
+//! - `epochs.csv` (one row per measurement window): `t_start`, `t_end`, the requested
+//!   and achieved τ of every channel, `bandwidth`, `cost`; on a controlled run the
+//!   objective of every method (NaN where a method measured nothing in that window);
+//! - the plots of the run's kind, each a well-formed SVG with text (title, axis labels).
+//!
+//! [`problems`] returns every breach it finds, so a failing test lists them all.
+
+use std::path::Path;
+
+use serde_json::Value;
+
+/// Every breach of the output contract in run directory `dir` (empty when it conforms).
+pub fn problems(dir: &Path) -> Vec<String> {
+    let mut out = Vec::new();
+    let summary = match std::fs::read_to_string(dir.join("summary.json")) {
+        Ok(text) => match serde_json::from_str::<Value>(&text) {
+            Ok(v) => v,
+            Err(e) => return vec![format!("summary.json is not JSON: {e}")],
+        },
+        Err(e) => return vec![format!("no summary.json: {e}")],
+    };
+    check_summary(&summary, &mut out);
+    let links = summary["links"].as_u64().unwrap_or(0) as usize;
+    check_trace(dir, links, &mut out);
+    let methods = check_epochs(dir, &summary, &mut out);
+    check_methods(&summary, &methods, &mut out);
+    check_plots(dir, &summary, &mut out);
+    out
+}
+
+/// Whether the run was controlled (a controller chose the delays).
+fn controlled(summary: &Value) -> bool {
+    summary.get("controller").is_some_and(Value::is_object)
+}
+
+fn check_summary(s: &Value, out: &mut Vec<String>) {
+    for key in ["scenario"] {
+        if !s[key].is_string() {
+            out.push(format!("summary.json: '{key}' is missing or not a string"));
+        }
+    }
+    for key in ["seed", "steps"] {
+        if !s[key].is_u64() {
+            out.push(format!(
+                "summary.json: '{key}' is missing or not a whole number"
+            ));
+        }
+    }
+    for key in [
+        "sim_seconds",
+        "wall_seconds",
+        "max_constraint_violation",
+        "mean_cost",
+    ] {
+        match s[key].as_f64() {
+            Some(x) if x.is_finite() && x >= 0.0 => {}
+            _ => out.push(format!(
+                "summary.json: '{key}' is missing or not a finite number ≥ 0 (got {})",
+                s[key]
+            )),
+        }
+    }
+    let digest = s["digest"].as_str().unwrap_or("");
+    if digest.len() != 64 || !digest.bytes().all(|b| b.is_ascii_hexdigit()) {
+        out.push(format!(
+            "summary.json: 'digest' is not 64 hex digits: {digest:?}"
+        ));
+    }
+}
+
+/// Every method with an objective column in epochs.csv has its mean cost in the summary,
+/// and so has the controller's own method.
+fn check_methods(s: &Value, methods: &[String], out: &mut Vec<String>) {
+    if !controlled(s) {
+        return;
+    }
+    if methods.is_empty() {
+        out.push("epochs.csv: a controlled run has no objective_<method> column".into());
+    }
+    let own = s["controller"]["method"]
+        .as_str()
+        .unwrap_or("?")
+        .to_string();
+    for m in methods.iter().chain(std::iter::once(&own)) {
+        let key = format!("mean_cost_{m}");
+        if !s.get(&key).is_some_and(|v| v.is_number() || v.is_null()) {
+            out.push(format!("summary.json: no per-method mean cost '{key}'"));
+        }
+    }
+}
+
+/// Reads a CSV file of plain numbers and names: header and rows.
+fn read_csv(dir: &Path, name: &str, out: &mut Vec<String>) -> Option<(Vec<String>, Vec<String>)> {
+    let text = match std::fs::read_to_string(dir.join(name)) {
+        Ok(t) => t,
+        Err(e) => {
+            out.push(format!("no {name}: {e}"));
+            return None;
+        }
+    };
+    let mut lines = text.lines();
+    let head: Vec<String> = lines
+        .next()
+        .unwrap_or("")
+        .split(',')
+        .map(str::to_string)
+        .collect();
+    Some((head, lines.map(str::to_string).collect()))
+}
+
+fn check_trace(dir: &Path, links: usize, out: &mut Vec<String>) {
+    let Some((head, rows)) = read_csv(dir, "trace.csv", out) else {
+        return;
+    };
+    if head.first().map(String::as_str) != Some("t") {
+        out.push("trace.csv: the first column is not 't'".into());
+    }
+    if links == 0 {
+        out.push("summary.json: 'links' is missing or zero".into());
+    }
+    let mut expected: Vec<String> = vec!["t".into()];
+    expected.extend((1..=links).map(|k| format!("w_L{k}")));
+    expected.extend((1..=links).map(|k| format!("f_L{k}")));
+    if head.len() < expected.len() || head[..expected.len()] != expected[..] {
+        out.push(format!(
+            "trace.csv: the header does not start with t, w_L1..w_L{links}, f_L1..f_L{links}"
+        ));
+    }
+    let bodies = &head[expected.len().min(head.len())..];
+    if bodies.is_empty() || bodies.len() % 6 != 0 {
+        out.push(format!(
+            "trace.csv: {} body columns, not a positive multiple of 6",
+            bodies.len()
+        ));
+    }
+    for group in bodies.chunks(6) {
+        let id = group[0].strip_prefix("px_B").unwrap_or("?");
+        let want: Vec<String> = ["px", "py", "pz", "vx", "vy", "vz"]
+            .iter()
+            .map(|a| format!("{a}_B{id}"))
+            .collect();
+        if group != &want[..] || id.parse::<u64>().is_err() {
+            out.push(format!(
+                "trace.csv: body columns {group:?} are not px..vz of one body"
+            ));
+        }
+    }
+    if rows.is_empty() {
+        out.push("trace.csv: no rows".into());
+    }
+    let mut last_t = f64::NEG_INFINITY;
+    for (r, row) in rows.iter().enumerate() {
+        let cells: Vec<&str> = row.split(',').collect();
+        if cells.len() != head.len() {
+            out.push(format!(
+                "trace.csv row {}: {} cells for {} columns",
+                r + 2,
+                cells.len(),
+                head.len()
+            ));
+            return;
+        }
+        for (c, cell) in head.iter().zip(&cells) {
+            match cell.parse::<f64>() {
+                Ok(x) if x.is_finite() => {}
+                _ => {
+                    out.push(format!(
+                        "trace.csv row {}, column {c}: not a finite number: {cell:?}",
+                        r + 2
+                    ));
+                    return;
+                }
+            }
+        }
+        let t: f64 = cells[0].parse().unwrap_or(f64::NAN);
+        if t <= last_t {
+            out.push(format!("trace.csv row {}: t does not increase", r + 2));
+            return;
+        }
+        last_t = t;
+    }
+}
+
+/// Checks epochs.csv; returns the methods that have an objective column.
+fn check_epochs(dir: &Path, summary: &Value, out: &mut Vec<String>) -> Vec<String> {
+    let Some((head, rows)) = read_csv(dir, "epochs.csv", out) else {
+        return Vec::new();
+    };
+    let mut expected = vec!["t_start".to_string(), "t_end".into()];
+    for ch in summary["channels"].as_array().into_iter().flatten() {
+        let name = ch["name"].as_str().unwrap_or("?");
+        expected.push(format!("tau_{name}_requested"));
+        expected.push(format!("tau_{name}_achieved"));
+    }
+    expected.push("bandwidth".into());
+    expected.push("cost".into());
+    let methods: Vec<String> = head
+        .iter()
+        .filter_map(|c| c.strip_prefix("objective_").map(str::to_string))
+        .collect();
+    for col in &expected {
+        if !head.contains(col) {
+            out.push(format!("epochs.csv: no column '{col}'"));
+        }
+    }
+    if rows.is_empty() {
+        out.push("epochs.csv: no rows".into());
+    }
+    for (r, row) in rows.iter().enumerate() {
+        let cells: Vec<&str> = row.split(',').collect();
+        if cells.len() != head.len() {
+            out.push(format!(
+                "epochs.csv row {}: {} cells for {} columns",
+                r + 2,
+                cells.len(),
+                head.len()
+            ));
+            return methods;
+        }
+        for (col, cell) in head.iter().zip(&cells) {
+            let x: f64 = match cell.parse() {
+                Ok(x) => x,
+                Err(_) => {
+                    out.push(format!(
+                        "epochs.csv row {}, column {col}: not a number: {cell:?}",
+                        r + 2
+                    ));
+                    return methods;
+                }
+            };
+            // A method that measured nothing in a window reports NaN for its objective.
+            if !x.is_finite() && expected.contains(col) {
+                out.push(format!(
+                    "epochs.csv row {}, column {col}: not finite: {cell:?}",
+                    r + 2
+                ));
+                return methods;
+            }
+        }
+    }
+    methods
+}
+
+fn check_plots(dir: &Path, summary: &Value, out: &mut Vec<String>) {
+    let mut want = vec!["constraints.svg", "bodies.svg", "cost.svg"];
+    if summary["channels"]
+        .as_array()
+        .is_some_and(|c| !c.is_empty())
+    {
+        want.extend(["delays.svg", "bandwidth.svg"]);
+    }
+    if controlled(summary) {
+        want.push("cost_methods.svg");
+    }
+    for name in want {
+        let text = match std::fs::read_to_string(dir.join(name)) {
+            Ok(t) => t,
+            Err(e) => {
+                out.push(format!("no {name}: {e}"));
+                continue;
+            }
+        };
+        match roxmltree::Document::parse(&text) {
+            Ok(doc) => {
+                let has_text = doc
+                    .descendants()
+                    .any(|n| n.tag_name().name() == "text" && n.text().is_some());
+                if doc.root_element().tag_name().name() != "svg" || !has_text {
+                    out.push(format!("{name}: not an SVG with text (title, axis labels)"));
+                }
+            }
+            Err(e) => out.push(format!("{name}: not well-formed XML: {e}")),
+        }
+    }
+}
