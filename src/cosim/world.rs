@@ -116,13 +116,20 @@ impl CoSim {
     /// Builds the world of a validated scenario, with its first events scheduled.
     pub fn new(scenario: &Scenario) -> CoSim {
         let layout = Layout::new(scenario);
-        let nodes: Vec<Node> = (0..layout.nodes)
-            .map(|n| Node::new(scenario, &layout, n))
-            .collect();
         let channels: Vec<Channel> = scenario
             .channels
             .iter()
             .map(|c| Channel::new(c, &layout.routes))
+            .collect();
+        let tdma_cycle = match &scenario.network {
+            NetworkSpec::Ideal => None,
+            NetworkSpec::Tdma(_) => TdmaLink::new(scenario, &channels)
+                .ok()
+                .map(|l| l.network().layout().cycle_len()),
+        };
+        let horizon = age_horizon(scenario, tdma_cycle);
+        let nodes: Vec<Node> = (0..layout.nodes)
+            .map(|n| Node::new(scenario, &layout, n, horizon))
             .collect();
         let mut link_home = vec![(0, 0); scenario.links.len()];
         let mut body_home = vec![(0, 0); scenario.bodies.len()];
@@ -393,7 +400,9 @@ impl CoSim {
             Event::Deliver(msg) => {
                 self.messages += 1;
                 obs.on_delivery(t, &msg);
-                self.nodes[msg.to].apply(msg.from, &msg.payload);
+                // The nodes' state is that of the next step's time.
+                let state_time = SimTime(self.steps_done * self.scenario.dt.0);
+                self.nodes[msg.to].apply(msg.from, msg.sent, state_time, &msg.payload);
                 Ok(())
             }
             Event::WindowEnd => {
@@ -583,6 +592,9 @@ impl CoSim {
     fn step(&mut self, t: SimTime, obs: &mut dyn Observer) -> Result<()> {
         let k = self.steps_done;
         let last = k == self.scenario.steps;
+        for node in &mut self.nodes {
+            node.prepare_step(t);
+        }
         // The nodes share nothing during a step: their rate evaluations are batched
         // (results and first error as if evaluated one after another in node order).
         let nodes = self.nodes.iter_mut().map(|n| (&mut n.system, &n.state));
@@ -686,4 +698,29 @@ impl CoSim {
             },
         }
     }
+}
+
+/// The longest age a border sample can legitimately have on `scenario`'s network, plus
+/// the longest gap until the next one: how far back a node keeps its ghosts' past and
+/// how far forward it extrapolates a force. Ideal channels: latency + period, at the
+/// largest period a controller may choose; TDMA: two cycles (a channel is served at
+/// least once per cycle, and a frame is delivered within its cycle).
+fn age_horizon(scenario: &Scenario, tdma_cycle: Option<SimTime>) -> SimTime {
+    if let Some(cycle) = tdma_cycle {
+        return SimTime(cycle.0.saturating_mul(2));
+    }
+    let tau_max = scenario
+        .controller
+        .as_ref()
+        .and_then(|c| SimTime::from_secs_f64(c.tau_max))
+        .unwrap_or(SimTime::ZERO);
+    scenario
+        .channels
+        .iter()
+        .map(|c| {
+            let tau = c.tau.max(tau_max);
+            SimTime(c.latency_for(tau).0.saturating_add(tau.0))
+        })
+        .max()
+        .unwrap_or(SimTime::ZERO)
 }

@@ -65,6 +65,16 @@ impl System {
                     let alpha_hat = 2.0 * mu * wdd + wd;
                     self.ws.rhs[l] = (-alpha_hat - k * sat(s / epsilon)) / mu2;
                 }
+                // Links with their own μ (border links of a delayed coupling): the same
+                // law with that μ; every row of `μ² J M⁻¹ Jᵀ ż = …` is divided by its own
+                // μ², so the matrix stays `J M⁻¹ Jᵀ`.
+                for (l, &mu) in self.link_mu.iter().enumerate() {
+                    let mu2 = mu * mu;
+                    let (w, wd, wdd) = (self.ws.w[l], self.ws.wd[l], self.ws.wdd[l]);
+                    let s = mu2 * wdd + 2.0 * mu * wd + w;
+                    let alpha_hat = 2.0 * mu * wdd + wd;
+                    self.ws.rhs[l] = (-alpha_hat - k * sat(s / epsilon)) / mu2;
+                }
             }
             Stabilizer::Baumgarte { alpha, beta } => {
                 for l in 0..self.links.len() {

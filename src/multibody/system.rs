@@ -31,6 +31,9 @@ pub struct System {
     pub(crate) links: Vec<Link>,
     pub(crate) forces: Vec<ForceSpec>,
     pub(crate) stabilizer: Stabilizer,
+    /// Per-link SMC surface parameter μ [s] where it differs from the stabilizer's
+    /// (empty: every link uses the stabilizer's μ).
+    pub(crate) link_mu: Vec<f64>,
     pub(crate) integrator: Integrator,
     pub(crate) dt: SimTime,
     /// Extra external force per body [N], held constant over a step (used for border
@@ -126,6 +129,7 @@ impl System {
             links,
             forces: scenario.forces.clone(),
             stabilizer: scenario.stabilizer,
+            link_mu: Vec::new(),
             integrator: scenario.integrator,
             dt: scenario.dt,
             extra_force: vec![v3(); nb],
@@ -198,6 +202,16 @@ impl System {
         }
     }
 
+    /// Sets link `l`'s SMC surface parameter μ [s] (the others keep the stabilizer's).
+    pub fn set_link_mu(&mut self, l: usize, mu: f64) {
+        if let Stabilizer::Smc { mu: base, .. } = self.stabilizer {
+            if self.link_mu.is_empty() {
+                self.link_mu = vec![base; self.links.len()];
+            }
+            self.link_mu[l] = mu;
+        }
+    }
+
     /// Makes body `i` immovable (infinite mass and inertia): its acceleration is zero
     /// and link forces do not move it (used for held ghosts).
     pub fn set_immovable(&mut self, i: usize) {
@@ -234,6 +248,45 @@ impl System {
             (n * z, ra.cross(&n) * z)
         } else {
             (-n * z, -rb.cross(&n) * z)
+        }
+    }
+
+    /// The time derivative of [`link_load_on`](Self::link_load_on): `d(n z)/dt =
+    /// ṅ z + n ż` [N/s] and `d(r × n z)/dt` [N·m/s], with `ṅ = (u − n (n·u)) / d` from
+    /// the anchors' relative velocity `u` in `state`, and `ż` the SMC law's rate at the
+    /// last evaluation (the slope the integrator used over the step that ended at
+    /// `state`). Under Baumgarte `z` is algebraic and has no rate of its own: only the
+    /// `ṅ z` part is returned.
+    pub fn link_load_rate_on(
+        &self,
+        state: &super::State,
+        l: usize,
+        body: usize,
+    ) -> (Vector3<f64>, Vector3<f64>) {
+        let link = &self.links[l];
+        let (mut ra, mut rb) = (Vector3::zeros(), Vector3::zeros());
+        let (mut wa, mut wb) = (Vector3::zeros(), Vector3::zeros());
+        if self.rigid {
+            ra = nalgebra::UnitQuaternion::new_normalize(state.q[link.a]) * link.anchor_a;
+            rb = nalgebra::UnitQuaternion::new_normalize(state.q[link.b]) * link.anchor_b;
+            wa = state.omega[link.a];
+            wb = state.omega[link.b];
+        }
+        let delta = state.p[link.a] + ra - state.p[link.b] - rb;
+        let u = state.v[link.a] + wa.cross(&ra) - state.v[link.b] - wb.cross(&rb);
+        let d = delta.norm();
+        let n = delta / d;
+        let n_dot = (u - n * n.dot(&u)) / d;
+        let (z, z_dot) = match self.stabilizer {
+            Stabilizer::Smc { .. } => (state.z[l], self.k[0].z.get(l).copied().unwrap_or(0.0)),
+            Stabilizer::Baumgarte { .. } => (self.ws.z_alg[l], 0.0),
+        };
+        let f_dot = n_dot * z + n * z_dot;
+        let f = n * z;
+        if body == link.a {
+            (f_dot, wa.cross(&ra).cross(&f) + ra.cross(&f_dot))
+        } else {
+            (-f_dot, -(wb.cross(&rb).cross(&f) + rb.cross(&f_dot)))
         }
     }
 

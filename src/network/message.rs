@@ -25,6 +25,11 @@ pub enum Payload {
         force: Vector3<f64>,
         /// Owner-side torque [N·m].
         torque: Vector3<f64>,
+        /// Rate of the owner-side force [N/s] (zero under the `reset` coupling, which
+        /// does not send it).
+        force_rate: Vector3<f64>,
+        /// Rate of the owner-side torque [N·m/s] (zero where not sent).
+        torque_rate: Vector3<f64>,
     },
     /// A border link's load on a ghosted body, for the body's owner.
     Force {
@@ -36,6 +41,11 @@ pub enum Payload {
         force: Vector3<f64>,
         /// Torque [N·m].
         torque: Vector3<f64>,
+        /// Rate of the force [N/s] (zero under the `reset` coupling, which does not
+        /// send it).
+        force_rate: Vector3<f64>,
+        /// Rate of the torque [N·m/s] (zero where not sent).
+        torque_rate: Vector3<f64>,
     },
 }
 
@@ -48,14 +58,10 @@ impl Payload {
         }
     }
 
-    /// Number of `f64` values on the wire (rotation only where the scene has it).
-    pub fn floats(&self, rigid: bool) -> usize {
-        match (self, rigid) {
-            (Payload::State { .. }, false) => 9,
-            (Payload::State { .. }, true) => 19,
-            (Payload::Force { .. }, false) => 3,
-            (Payload::Force { .. }, true) => 6,
-        }
+    /// Number of `f64` values on the wire (rotation only where the scene has it, the
+    /// force rates only where the coupling sends them).
+    pub fn floats(&self, rigid: bool, rates: bool) -> usize {
+        crate::network::tdma::frame::floats_per_route(self.kind(), rigid, rates)
     }
 }
 

@@ -133,6 +133,7 @@ mod tests {
             node_of,
             link_owner,
             ghosts: GhostMode::Integrate,
+            coupling: crate::scenario::model::Coupling::Reset,
         });
         s
     }

@@ -5,13 +5,15 @@ use std::collections::BTreeMap;
 
 use nalgebra::{Quaternion, Vector3};
 
+use super::coupling::{Correction, Extrapolated, GhostHistory, GhostSample};
 use super::Layout;
 use crate::kernel::SimTime;
 use crate::multibody::{State, System};
 use crate::network::Payload;
-use crate::scenario::model::{GhostMode, Scenario};
+use crate::scenario::model::{Coupling, GhostMode, Scenario};
 
-/// A border force received from another node, held until the next arrival.
+/// A border force received from another node: held until the next arrival (`reset`),
+/// or extrapolated with its rate (`predict`).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 struct HeldForce {
     /// Global link index.
@@ -20,8 +22,21 @@ struct HeldForce {
     from: usize,
     /// Local body index it acts on.
     body: usize,
-    force: Vector3<f64>,
-    torque: Vector3<f64>,
+    /// The last received value, its rate and sample time.
+    value: Extrapolated,
+}
+
+/// How this node couples to its neighbours (see [`super::coupling`]).
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+struct CouplingState {
+    scheme: Coupling,
+    /// Longest age a sample can legitimately have; extrapolations stop there.
+    horizon: SimTime,
+    dt: SimTime,
+    /// Per ghost (`predict` with integrated ghosts): its recent past.
+    history: Vec<GhostHistory>,
+    /// Per ghost (`predict`): the owner-side load with its rate.
+    ghost_loads: Vec<Extrapolated>,
 }
 
 /// A ghost's last received state (for the `hold` mode).
@@ -54,11 +69,13 @@ pub struct Node {
     ghosts: GhostMode,
     held_forces: Vec<HeldForce>,
     held_states: Vec<HeldState>,
+    coupling: CouplingState,
 }
 
 impl Node {
-    /// Builds node `index` of `layout` for `scenario`.
-    pub fn new(scenario: &Scenario, layout: &Layout, index: usize) -> Node {
+    /// Builds node `index` of `layout` for `scenario`; `horizon` is the longest age a
+    /// sample can have on the scene's network.
+    pub fn new(scenario: &Scenario, layout: &Layout, index: usize, horizon: SimTime) -> Node {
         let owned = layout.owned[index].len();
         let bodies: Vec<usize> = layout.owned[index]
             .iter()
@@ -125,11 +142,32 @@ impl Node {
                     link: r.link?,
                     from: r.from,
                     body: local_body[&r.body],
-                    force: Vector3::zeros(),
-                    torque: Vector3::zeros(),
+                    value: Extrapolated::zero(),
                 })
             })
             .collect();
+        let scheme = scenario
+            .partition
+            .as_ref()
+            .map_or(Coupling::Reset, |p| p.coupling);
+        let ghost_count = bodies.len() - owned;
+        let predict_ghosts = scheme == Coupling::Predict && ghosts == GhostMode::Integrate;
+        let steps = (horizon.0 / scenario.dt.0) as usize + 2;
+        let coupling = CouplingState {
+            scheme,
+            horizon,
+            dt: scenario.dt,
+            history: if predict_ghosts {
+                vec![GhostHistory::new(steps); ghost_count]
+            } else {
+                Vec::new()
+            },
+            ghost_loads: if scheme == Coupling::Predict {
+                vec![Extrapolated::zero(); ghost_count]
+            } else {
+                Vec::new()
+            },
+        };
         Node {
             index,
             system,
@@ -142,6 +180,7 @@ impl Node {
             ghosts,
             held_forces,
             held_states,
+            coupling,
         }
     }
 
@@ -153,64 +192,99 @@ impl Node {
     /// The state message for owned body `g` (global) to node `receiver`, at time `t`:
     /// the body's state and the owner-side load, i.e. the external force plus every link
     /// force on the body that the receiver does not compute itself (this node's links
-    /// and the border forces held from nodes other than the receiver).
+    /// and the border forces received from nodes other than the receiver), with the
+    /// load's rate when the coupling sends rates.
     pub fn state_payload(&self, t: SimTime, g: usize, receiver: usize) -> Payload {
         let i = self.local_body[&g];
+        let rates = self.coupling.scheme.sends_rates();
         let mut force = Vector3::zeros();
         let mut torque = Vector3::zeros();
+        let mut force_rate = Vector3::zeros();
+        let mut torque_rate = Vector3::zeros();
         for f in self.system.forces.iter().filter(|f| f.body == i) {
             force += f.at(t);
+            if rates {
+                force_rate += f.rate_at(t);
+            }
         }
         for &l in &self.incident[i] {
             let (f, tq) = self.system.link_load_on(&self.state, l, i);
             force += f;
             torque += tq;
+            if rates {
+                let (fr, tr) = self.system.link_load_rate_on(&self.state, l, i);
+                force_rate += fr;
+                torque_rate += tr;
+            }
         }
         for h in self
             .held_forces
             .iter()
             .filter(|h| h.body == i && h.from != receiver)
         {
-            force += h.force;
-            torque += h.torque;
+            let (f, tq) = self.held_load(h, t);
+            force += f;
+            torque += tq;
+            if rates {
+                force_rate += h.value.force_rate;
+                torque_rate += h.value.torque_rate;
+            }
         }
+        let rigid = self.state.is_rigid();
         Payload::State {
             body: g,
             p: self.state.p[i],
             v: self.state.v[i],
-            q: self
-                .state
-                .q
-                .get(i)
-                .copied()
-                .unwrap_or_else(Quaternion::identity),
-            omega: self
-                .state
-                .omega
-                .get(i)
-                .copied()
-                .unwrap_or_else(Vector3::zeros),
+            q: if rigid {
+                self.state.q[i]
+            } else {
+                Quaternion::identity()
+            },
+            omega: if rigid {
+                self.state.omega[i]
+            } else {
+                Vector3::zeros()
+            },
             force,
             torque,
+            force_rate,
+            torque_rate,
         }
     }
 
-    /// The force message of owned border link `l` (global) on ghost body `g` (global).
+    /// The value of a held border force at `t`: as received (`reset`), or extrapolated
+    /// with its rate (`predict`).
+    fn held_load(&self, h: &HeldForce, t: SimTime) -> (Vector3<f64>, Vector3<f64>) {
+        match self.coupling.scheme {
+            Coupling::Reset => (h.value.force, h.value.torque),
+            Coupling::Predict => h.value.at(t, self.coupling.horizon),
+        }
+    }
+
+    /// The force message of owned border link `l` (global) on ghost body `g` (global),
+    /// with its rate when the coupling sends rates.
     pub fn force_payload(&self, l: usize, g: usize) -> Payload {
         let ll = self.links.iter().position(|&x| x == l).unwrap_or_default();
-        let (force, torque) = self
-            .system
-            .link_load_on(&self.state, ll, self.local_body[&g]);
+        let body = self.local_body[&g];
+        let (force, torque) = self.system.link_load_on(&self.state, ll, body);
+        let (force_rate, torque_rate) = if self.coupling.scheme.sends_rates() {
+            self.system.link_load_rate_on(&self.state, ll, body)
+        } else {
+            (Vector3::zeros(), Vector3::zeros())
+        };
         Payload::Force {
             link: l,
             body: g,
             force,
             torque,
+            force_rate,
+            torque_rate,
         }
     }
 
-    /// Applies a delivered message from node `from`.
-    pub fn apply(&mut self, from: usize, payload: &Payload) {
+    /// Applies a message from node `from`, sampled at `sent`, delivered while the
+    /// node's state is that of time `state_time` (the next step's time).
+    pub fn apply(&mut self, from: usize, sent: SimTime, state_time: SimTime, payload: &Payload) {
         match payload {
             Payload::State {
                 body,
@@ -220,17 +294,63 @@ impl Node {
                 omega,
                 force,
                 torque,
+                force_rate,
+                torque_rate,
             } => {
                 let Some(g) = self.local(*body) else { return };
-                self.state.p[g] = *p;
-                self.state.v[g] = *v;
-                if self.state.is_rigid() {
-                    self.state.q[g] = *q;
-                    self.state.omega[g] = *omega;
-                    self.system.extra_torque[g] = *torque;
+                let k = g - self.owned;
+                let rigid = self.state.is_rigid();
+                match self.coupling.scheme {
+                    Coupling::Predict => {
+                        self.coupling.ghost_loads[k] = Extrapolated {
+                            force: *force,
+                            torque: *torque,
+                            force_rate: *force_rate,
+                            torque_rate: *torque_rate,
+                            sent,
+                        };
+                    }
+                    Coupling::Reset => {
+                        self.system.extra_force[g] = *force;
+                        if rigid {
+                            self.system.extra_torque[g] = *torque;
+                        }
+                    }
                 }
-                self.system.extra_force[g] = *force;
-                let held = &mut self.held_states[g - self.owned];
+                let received = GhostSample {
+                    p: *p,
+                    v: *v,
+                    q: *q,
+                    omega: *omega,
+                };
+                let current = self.ghost_sample(g);
+                if let Some(history) = self.coupling.history.get_mut(k) {
+                    // Predict: shift the ghost (and its past from `sent` on) by the
+                    // sample's error against the ghost's own state at `sent`.
+                    let own = if sent >= state_time {
+                        None
+                    } else {
+                        history.at(sent, self.coupling.dt).cloned()
+                    };
+                    let own = own.unwrap_or(current);
+                    let c = Correction::new(sent, &received, &own);
+                    history.correct(&c, self.coupling.dt, rigid);
+                    let (ps, vs) = (&mut self.state.p[g], &mut self.state.v[g]);
+                    if rigid {
+                        let rot = Some((&mut self.state.q[g], &mut self.state.omega[g]));
+                        c.apply(state_time, ps, vs, rot);
+                    } else {
+                        c.apply(state_time, ps, vs, None);
+                    }
+                } else {
+                    self.state.p[g] = *p;
+                    self.state.v[g] = *v;
+                    if rigid {
+                        self.state.q[g] = *q;
+                        self.state.omega[g] = *omega;
+                    }
+                }
+                let held = &mut self.held_states[k];
                 held.p = *p;
                 held.v = *v;
                 held.q = self.state.q.get(g).copied();
@@ -240,6 +360,8 @@ impl Node {
                 link,
                 force,
                 torque,
+                force_rate,
+                torque_rate,
                 ..
             } => {
                 let Some(h) = self
@@ -249,19 +371,80 @@ impl Node {
                 else {
                     return;
                 };
-                h.force = *force;
-                h.torque = *torque;
-                let body = h.body;
-                let (mut f, mut t) = (Vector3::zeros(), Vector3::zeros());
-                for h in self.held_forces.iter().filter(|h| h.body == body) {
-                    f += h.force;
-                    t += h.torque;
-                }
-                self.system.extra_force[body] = f;
-                if self.state.is_rigid() {
-                    self.system.extra_torque[body] = t;
+                h.value = Extrapolated {
+                    force: *force,
+                    torque: *torque,
+                    force_rate: *force_rate,
+                    torque_rate: *torque_rate,
+                    sent,
+                };
+                if self.coupling.scheme == Coupling::Reset {
+                    let body = h.body;
+                    let (mut f, mut t) = (Vector3::zeros(), Vector3::zeros());
+                    for h in self.held_forces.iter().filter(|h| h.body == body) {
+                        f += h.value.force;
+                        t += h.value.torque;
+                    }
+                    self.system.extra_force[body] = f;
+                    if self.state.is_rigid() {
+                        self.system.extra_torque[body] = t;
+                    }
                 }
             }
+        }
+    }
+
+    /// The ghost `g`'s (local) current state.
+    fn ghost_sample(&self, g: usize) -> GhostSample {
+        let rigid = self.state.is_rigid();
+        GhostSample {
+            p: self.state.p[g],
+            v: self.state.v[g],
+            q: if rigid {
+                self.state.q[g]
+            } else {
+                Quaternion::identity()
+            },
+            omega: if rigid {
+                self.state.omega[g]
+            } else {
+                Vector3::zeros()
+            },
+        }
+    }
+
+    /// Before the step at `t` (after every delivery at `t`): under `predict`, sets the
+    /// extrapolated border forces and owner-side loads for this step and records the
+    /// ghosts' states at `t`. Nothing under `reset`, whose loads change only on arrival.
+    pub fn prepare_step(&mut self, t: SimTime) {
+        if self.coupling.scheme == Coupling::Reset {
+            return;
+        }
+        let rigid = self.state.is_rigid();
+        for h in &self.held_forces {
+            self.system.extra_force[h.body] = Vector3::zeros();
+            if rigid {
+                self.system.extra_torque[h.body] = Vector3::zeros();
+            }
+        }
+        for h in &self.held_forces {
+            let (f, tq) = h.value.at(t, self.coupling.horizon);
+            self.system.extra_force[h.body] += f;
+            if rigid {
+                self.system.extra_torque[h.body] += tq;
+            }
+        }
+        for (k, load) in self.coupling.ghost_loads.iter().enumerate() {
+            let g = self.owned + k;
+            let (f, tq) = load.at(t, self.coupling.horizon);
+            self.system.extra_force[g] = f;
+            if rigid {
+                self.system.extra_torque[g] = tq;
+            }
+        }
+        for k in 0..self.coupling.history.len() {
+            let sample = self.ghost_sample(self.owned + k);
+            self.coupling.history[k].record(t, self.coupling.dt, sample);
         }
     }
 

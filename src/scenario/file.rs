@@ -509,6 +509,11 @@ pub struct PartitionFile {
     /// `"integrate"` (the thesis's ghost equations).
     #[serde(default)]
     pub ghosts: GhostsFile,
+    /// How a node uses border data that arrives `age` late: `"reset"` (overwrite the
+    /// ghost, hold the force) or `"predict"` (correct the ghost by its prediction error
+    /// at the sample's time, apply `F + Ḟ·age`); default `"reset"`.
+    #[serde(default)]
+    pub coupling: CouplingFile,
     /// Owners of chosen border links, overriding the default rule (the thesis ring for
     /// the 4-node quadrants, else the node of the link's body that comes first in file
     /// order); default none.
@@ -526,6 +531,18 @@ pub enum GhostsFile {
     Integrate,
     /// `"hold"`: a ghost stays at the last received state (zero-order hold).
     Hold,
+}
+
+/// `partition.coupling`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CouplingFile {
+    /// `"reset"` (default): every arriving state overwrites its ghost, every border
+    /// force is held until the next arrival.
+    #[default]
+    Reset,
+    /// `"predict"`: delay-compensated ghosts and extrapolated border forces.
+    Predict,
 }
 
 /// One entry of `partition.link_owners`.

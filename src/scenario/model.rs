@@ -172,7 +172,29 @@ impl Ramp {
     }
 }
 
+impl Ramp {
+    /// The scale's rate at `t` [1/s] (zero outside `(t0, t1)`).
+    pub fn rate_at(&self, t: SimTime) -> f64 {
+        if t < self.t0 || t >= self.t1 {
+            0.0
+        } else {
+            (self.a1 - self.a0) / (self.t1.0 - self.t0.0) as f64 * 1e9
+        }
+    }
+}
+
 impl ForceSpec {
+    /// The force's time derivative [N/s] at `t` (zero where the force is off).
+    pub fn rate_at(&self, t: SimTime) -> Vector3<f64> {
+        let on = t >= self.from && self.until.is_none_or(|u| t < u);
+        if !on {
+            return Vector3::zeros();
+        }
+        let arg = self.omega * t.as_secs_f64() + self.phase;
+        let (scale, scale_rate) = self.ramp.map_or((1.0, 0.0), |r| (r.at(t), r.rate_at(t)));
+        self.amplitude * (scale * self.omega * arg.cos() + scale_rate * arg.sin())
+    }
+
     /// The force [N] at time `t`.
     pub fn at(&self, t: SimTime) -> Vector3<f64> {
         let on = t >= self.from && self.until.is_none_or(|u| t < u);
@@ -213,6 +235,36 @@ pub enum GhostMode {
     Hold,
 }
 
+/// How a node uses border data that arrives late (`partition.coupling`).
+///
+/// Every sample a node receives is `age = t_arrival − t_sample` old. The schemes differ
+/// in what they do with that age (see `partition::coupling` for the equations).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum Coupling {
+    /// Each arriving state overwrites the ghost; each border force is held until the
+    /// next arrival (the thesis's reading; unstable once the age reaches a few ms).
+    Reset,
+    /// Delay-compensated ghosts and extrapolated border forces: a sample corrects the
+    /// ghost by its error against the ghost's own past at the sample's time, carried to
+    /// now; forces and owner-side loads are applied as `F + Ḟ·age`.
+    Predict,
+}
+
+impl Coupling {
+    /// The name used in scenario files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Coupling::Reset => "reset",
+            Coupling::Predict => "predict",
+        }
+    }
+
+    /// Whether messages carry the rates `Ḟ` of their forces.
+    pub fn sends_rates(self) -> bool {
+        !matches!(self, Coupling::Reset)
+    }
+}
+
 /// What a message carries (the `time` distribution routes by this).
 #[derive(
     Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
@@ -248,6 +300,8 @@ pub struct PartitionSpec {
     pub link_owner: Vec<usize>,
     /// Ghost treatment.
     pub ghosts: GhostMode,
+    /// How late border data is used.
+    pub coupling: Coupling,
 }
 
 /// A periodic communication channel (SPEC section 4).

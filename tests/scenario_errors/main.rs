@@ -873,6 +873,7 @@ fn partition_sections(
         } else {
             GhostsFile::Integrate
         },
+        coupling: Default::default(),
         link_owners,
     };
     (Some(partition), channels)

@@ -8,8 +8,8 @@ use std::collections::BTreeMap;
 
 use super::bodies::Ids;
 use crate::error::{Error, Result};
-use crate::scenario::file::{GhostsFile, GridFile, LinkOwnerFile, PartitionFile};
-use crate::scenario::model::{BodySpec, GhostMode, LinkSpec, PartitionSpec};
+use crate::scenario::file::{CouplingFile, GhostsFile, GridFile, LinkOwnerFile, PartitionFile};
+use crate::scenario::model::{BodySpec, Coupling, GhostMode, LinkSpec, PartitionSpec};
 
 /// Validates `partition` against the model (`grid` is the model's grid section, if it
 /// is one; `bodies` and `links` are the validated model in file order).
@@ -60,6 +60,10 @@ pub(super) fn partition(
         ghosts: match p.ghosts {
             GhostsFile::Integrate => GhostMode::Integrate,
             GhostsFile::Hold => GhostMode::Hold,
+        },
+        coupling: match p.coupling {
+            CouplingFile::Reset => Coupling::Reset,
+            CouplingFile::Predict => Coupling::Predict,
         },
     })
 }
