@@ -309,6 +309,23 @@ fn write_summary(
         "solver": solver,
     });
     let mut summary = summary;
+    if let Some(p) = &scenario.partition {
+        let mut ports = crate::partition::coupling::PortAccount::default();
+        for node in world.nodes() {
+            let e = node.port_energy();
+            ports.taken += e.taken;
+            ports.given += e.given;
+            ports.dissipated += e.dissipated;
+        }
+        let mut coupling = json!({"scheme": p.coupling.name()});
+        if let Some(tank) = p.coupling.tank() {
+            coupling["tank_j"] = json!(tank);
+            coupling["ports_taken_j"] = json!(ports.taken);
+            coupling["ports_given_j"] = json!(ports.given);
+            coupling["dissipated_j"] = json!(ports.dissipated);
+        }
+        summary["coupling"] = coupling;
+    }
     network::summarize(world, &mut summary);
     controlled::summarize(world, exp, &mut summary);
     let mut text = serde_json::to_string_pretty(&summary).unwrap_or_default();

@@ -45,11 +45,11 @@ impl TdmaLink {
         };
         let cfg = spec.config.clone();
         let rigid = s.body_model == crate::scenario::model::BodyModel::Rigid;
-        let rates = s
+        let coupling = s
             .partition
             .as_ref()
-            .is_some_and(|p| p.coupling.sends_rates());
-        let frames = FrameSizes::from_channels(channels, rigid, rates, cfg.header_bytes);
+            .map_or(crate::scenario::model::Coupling::Reset, |p| p.coupling);
+        let frames = FrameSizes::from_channels(channels, rigid, coupling, cfg.header_bytes);
         let senders = senders(channels);
         let layout = crate::network::tdma::CycleLayout::new(&cfg)?;
         let initial = match &spec.slot_list {

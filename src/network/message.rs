@@ -3,7 +3,7 @@
 use nalgebra::{Quaternion, Vector3};
 
 use crate::kernel::SimTime;
-use crate::scenario::model::DataKind;
+use crate::scenario::model::{Coupling, DataKind};
 
 /// The data a message carries.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -30,6 +30,9 @@ pub enum Payload {
         force_rate: Vector3<f64>,
         /// Rate of the owner-side torque [N·m/s] (zero where not sent).
         torque_rate: Vector3<f64>,
+        /// `passive`: the energy the body has put into its port with the receiver so far
+        /// [J] (zero under the other schemes, which do not send it).
+        energy: f64,
     },
     /// A border link's load on a ghosted body, for the body's owner.
     Force {
@@ -46,6 +49,9 @@ pub enum Payload {
         force_rate: Vector3<f64>,
         /// Rate of the torque [N·m/s] (zero where not sent).
         torque_rate: Vector3<f64>,
+        /// `passive`: the energy the sender's bodies have put into the port of this
+        /// body so far [J] (zero where not sent).
+        energy: f64,
     },
 }
 
@@ -60,8 +66,8 @@ impl Payload {
 
     /// Number of `f64` values on the wire (rotation only where the scene has it, the
     /// force rates only where the coupling sends them).
-    pub fn floats(&self, rigid: bool, rates: bool) -> usize {
-        crate::network::tdma::frame::floats_per_route(self.kind(), rigid, rates)
+    pub fn floats(&self, rigid: bool, coupling: Coupling) -> usize {
+        crate::network::tdma::frame::floats_per_route(self.kind(), rigid, coupling)
     }
 }
 

@@ -27,6 +27,57 @@
 
 use std::collections::VecDeque;
 
+/// One side's energy account of a border port (`passive`).
+///
+/// A port is a ghosted body `B` and the node that ghosts it (the link owner, side 1),
+/// seen from both ends: side 1 applies the port's link forces to its own bodies (the
+/// far ends `A` of its border links to `B`), side 2 (`B`'s owner) applies the received
+/// border forces to `B`. Each side books the power `P = F·v + T·ω` it applies to its
+/// bodies every step: what its bodies give to the port is `taken`, what the port gives
+/// to them is `given`. Each side may give only what the other side has reported taken
+/// (`received`, cumulative, so a late or lost report only delays the credit) plus half
+/// the initial tank: `given ≤ received + tank/2`. Summed over both sides the coupling's
+/// net work on the bodies, `given₁ + given₂ − taken₁ − taken₂`, can then never exceed
+/// the tank, whatever the delay, jitter or loss. Where the predicted force would give
+/// more, a passivity controller removes the excess with a force against the body's
+/// velocity (it dissipates exactly the power the tank cannot pay).
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct PortAccount {
+    /// Energy this side's bodies put into the port [J] (cumulative `∫max(−P, 0) dt`).
+    pub taken: f64,
+    /// Energy the port gave this side's bodies [J] (cumulative `∫max(P, 0) dt`).
+    pub given: f64,
+    /// The other side's `taken` as last reported [J].
+    pub received: f64,
+    /// Energy the passivity controller removed on this side [J].
+    pub dissipated: f64,
+}
+
+impl PortAccount {
+    /// What this side may still give [J].
+    pub fn available(&self, tank: f64) -> f64 {
+        self.received + 0.5 * tank - self.given
+    }
+
+    /// Books power `p` [W] applied over `dt` [s]; returns the power the tank allows
+    /// (`p` itself unless `p > 0` exceeds what is available).
+    pub fn book(&mut self, p: f64, dt: f64, tank: f64) -> f64 {
+        if p <= 0.0 {
+            self.taken -= p * dt;
+            return p;
+        }
+        let allowed = p.min((self.available(tank) / dt).max(0.0));
+        self.given += allowed * dt;
+        self.dissipated += (p - allowed) * dt;
+        allowed
+    }
+
+    /// A report of the other side's `taken` (reports may arrive out of order).
+    pub fn report(&mut self, taken: f64) {
+        self.received = self.received.max(taken);
+    }
+}
+
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
 use crate::kernel::SimTime;

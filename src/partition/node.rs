@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 
 use nalgebra::{Quaternion, Vector3};
 
-use super::coupling::{Correction, Extrapolated, GhostHistory, GhostSample};
+use super::coupling::{Correction, Extrapolated, GhostHistory, GhostSample, PortAccount};
 use super::Layout;
 use crate::kernel::SimTime;
 use crate::multibody::{State, System};
@@ -37,6 +37,12 @@ struct CouplingState {
     history: Vec<GhostHistory>,
     /// Per ghost (`predict`): the owner-side load with its rate.
     ghost_loads: Vec<Extrapolated>,
+    /// `passive`: the initial tank per port [J].
+    tank: Option<f64>,
+    /// `passive`, per ghost: this node's side (link owner) of the ghost's port.
+    ports_out: Vec<PortAccount>,
+    /// `passive`, per (local owned body, ghosting node): the body owner's side.
+    ports_in: Vec<(usize, usize, PortAccount)>,
 }
 
 /// A ghost's last received state (for the `hold` mode).
@@ -145,13 +151,13 @@ impl Node {
                     value: Extrapolated::zero(),
                 })
             })
-            .collect();
+            .collect::<Vec<HeldForce>>();
         let scheme = scenario
             .partition
             .as_ref()
             .map_or(Coupling::Reset, |p| p.coupling);
         let ghost_count = bodies.len() - owned;
-        let predict_ghosts = scheme == Coupling::Predict && ghosts == GhostMode::Integrate;
+        let predict_ghosts = scheme.predicts() && ghosts == GhostMode::Integrate;
         let steps = (horizon.0 / scenario.dt.0) as usize + 2;
         let coupling = CouplingState {
             scheme,
@@ -162,12 +168,33 @@ impl Node {
             } else {
                 Vec::new()
             },
-            ghost_loads: if scheme == Coupling::Predict {
+            ghost_loads: if scheme.predicts() {
                 vec![Extrapolated::zero(); ghost_count]
             } else {
                 Vec::new()
             },
+            tank: scheme.tank(),
+            ports_out: if scheme.tank().is_some() {
+                vec![PortAccount::default(); ghost_count]
+            } else {
+                Vec::new()
+            },
+            ports_in: Vec::new(),
         };
+        let mut coupling = coupling;
+        if coupling.tank.is_some() {
+            for h in &held_forces {
+                if !coupling
+                    .ports_in
+                    .iter()
+                    .any(|p| p.0 == h.body && p.1 == h.from)
+                {
+                    coupling
+                        .ports_in
+                        .push((h.body, h.from, PortAccount::default()));
+                }
+            }
+        }
         Node {
             index,
             system,
@@ -249,15 +276,22 @@ impl Node {
             torque,
             force_rate,
             torque_rate,
+            energy: self
+                .coupling
+                .ports_in
+                .iter()
+                .find(|p| p.0 == i && p.1 == receiver)
+                .map_or(0.0, |p| p.2.taken),
         }
     }
 
     /// The value of a held border force at `t`: as received (`reset`), or extrapolated
     /// with its rate (`predict`).
     fn held_load(&self, h: &HeldForce, t: SimTime) -> (Vector3<f64>, Vector3<f64>) {
-        match self.coupling.scheme {
-            Coupling::Reset => (h.value.force, h.value.torque),
-            Coupling::Predict => h.value.at(t, self.coupling.horizon),
+        if self.coupling.scheme.predicts() {
+            h.value.at(t, self.coupling.horizon)
+        } else {
+            (h.value.force, h.value.torque)
         }
     }
 
@@ -279,6 +313,11 @@ impl Node {
             torque,
             force_rate,
             torque_rate,
+            energy: self
+                .coupling
+                .ports_out
+                .get(body - self.owned)
+                .map_or(0.0, |p| p.taken),
         }
     }
 
@@ -296,12 +335,16 @@ impl Node {
                 torque,
                 force_rate,
                 torque_rate,
+                energy,
             } => {
                 let Some(g) = self.local(*body) else { return };
                 let k = g - self.owned;
                 let rigid = self.state.is_rigid();
+                if let Some(port) = self.coupling.ports_out.get_mut(k) {
+                    port.report(*energy);
+                }
                 match self.coupling.scheme {
-                    Coupling::Predict => {
+                    Coupling::Predict | Coupling::Passive { .. } => {
                         self.coupling.ghost_loads[k] = Extrapolated {
                             force: *force,
                             torque: *torque,
@@ -362,8 +405,19 @@ impl Node {
                 torque,
                 force_rate,
                 torque_rate,
-                ..
+                energy,
+                body,
             } => {
+                if let Some(g) = self.local(*body) {
+                    if let Some(p) = self
+                        .coupling
+                        .ports_in
+                        .iter_mut()
+                        .find(|p| p.0 == g && p.1 == from)
+                    {
+                        p.2.report(*energy);
+                    }
+                }
                 let Some(h) = self
                     .held_forces
                     .iter_mut()
@@ -394,6 +448,19 @@ impl Node {
         }
     }
 
+    /// `passive`: this node's port accounts summed (both sides); zero otherwise.
+    pub fn port_energy(&self) -> PortAccount {
+        let mut sum = PortAccount::default();
+        let ins = self.coupling.ports_in.iter().map(|p| &p.2);
+        for p in self.coupling.ports_out.iter().chain(ins) {
+            sum.taken += p.taken;
+            sum.given += p.given;
+            sum.received += p.received;
+            sum.dissipated += p.dissipated;
+        }
+        sum
+    }
+
     /// The ghost `g`'s (local) current state.
     fn ghost_sample(&self, g: usize) -> GhostSample {
         let rigid = self.state.is_rigid();
@@ -421,10 +488,10 @@ impl Node {
             return;
         }
         let rigid = self.state.is_rigid();
-        for h in &self.held_forces {
-            self.system.extra_force[h.body] = Vector3::zeros();
+        for b in 0..self.owned {
+            self.system.extra_force[b] = Vector3::zeros();
             if rigid {
-                self.system.extra_torque[h.body] = Vector3::zeros();
+                self.system.extra_torque[b] = Vector3::zeros();
             }
         }
         for h in &self.held_forces {
@@ -445,6 +512,112 @@ impl Node {
         for k in 0..self.coupling.history.len() {
             let sample = self.ghost_sample(self.owned + k);
             self.coupling.history[k].record(t, self.coupling.dt, sample);
+        }
+        if let Some(tank) = self.coupling.tank {
+            self.passivity(t, tank);
+        }
+    }
+
+    /// `passive`: books each port's power for the step at `t` and, where a side would
+    /// give its bodies more than its account holds, adds the passivity controller's
+    /// force `−c v` (and torque `−c ω`) that removes exactly the excess.
+    fn passivity(&mut self, t: SimTime, tank: f64) {
+        let h = self.coupling.dt.as_secs_f64();
+        let rigid = self.state.is_rigid();
+        // Side 2: the border forces this node applies to its own bodies, per port.
+        for p in 0..self.coupling.ports_in.len() {
+            let (b, from) = (self.coupling.ports_in[p].0, self.coupling.ports_in[p].1);
+            let (mut f, mut tq) = (Vector3::zeros(), Vector3::zeros());
+            for hf in self
+                .held_forces
+                .iter()
+                .filter(|hf| hf.body == b && hf.from == from)
+            {
+                let (df, dt) = hf.value.at(t, self.coupling.horizon);
+                f += df;
+                tq += dt;
+            }
+            let (v, w) = self.velocities(b);
+            let power = f.dot(&v) + if rigid { tq.dot(&w) } else { 0.0 };
+            let allowed = self.coupling.ports_in[p].2.book(power, h, tank);
+            self.damp(b, power - allowed, 1.0);
+        }
+        // Side 1: this node's border links to each ghost, on their own-body ends.
+        for k in 0..self.coupling.ports_out.len() {
+            let g = self.owned + k;
+            let mut power = 0.0;
+            let mut positive = 0.0;
+            for &l in &self.incident[g] {
+                let p_l = self.end_power(l, g);
+                power += p_l;
+                positive += p_l.max(0.0);
+            }
+            let allowed = self.coupling.ports_out[k].book(power, h, tank);
+            if power > allowed && positive > 0.0 {
+                // Every giving end gives the same fraction less.
+                let fraction = (power - allowed) / positive;
+                for i in 0..self.incident[g].len() {
+                    let l = self.incident[g][i];
+                    let p_l = self.end_power(l, g);
+                    if p_l > 0.0 {
+                        let a = self.far_end(l, g);
+                        self.damp(a, p_l, fraction);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Velocity and angular velocity of local body `b` (zero ω on point masses).
+    fn velocities(&self, b: usize) -> (Vector3<f64>, Vector3<f64>) {
+        let w = self
+            .state
+            .omega
+            .get(b)
+            .copied()
+            .unwrap_or_else(Vector3::zeros);
+        (self.state.v[b], w)
+    }
+
+    /// The end of local link `l` that is not `g`.
+    fn far_end(&self, l: usize, g: usize) -> usize {
+        let link = &self.system.links()[l];
+        if link.a == g {
+            link.b
+        } else {
+            link.a
+        }
+    }
+
+    /// Power [W] link `l` delivers to its end opposite ghost `g`.
+    fn end_power(&self, l: usize, g: usize) -> f64 {
+        let a = self.far_end(l, g);
+        let (f, tq) = self.system.link_load_on(&self.state, l, a);
+        let (v, w) = self.velocities(a);
+        f.dot(&v)
+            + if self.state.is_rigid() {
+                tq.dot(&w)
+            } else {
+                0.0
+            }
+    }
+
+    /// Adds to body `b` the force `−c v` (torque `−c ω`) that removes `fraction` of
+    /// `excess` [W] of power.
+    fn damp(&mut self, b: usize, excess: f64, fraction: f64) {
+        if excess <= 0.0 {
+            return;
+        }
+        let (v, w) = self.velocities(b);
+        let rigid = self.state.is_rigid();
+        let speed2 = v.norm_squared() + if rigid { w.norm_squared() } else { 0.0 };
+        if speed2 == 0.0 {
+            return;
+        }
+        let c = excess * fraction / speed2;
+        self.system.extra_force[b] -= v * c;
+        if rigid {
+            self.system.extra_torque[b] -= w * c;
         }
     }
 

@@ -510,8 +510,11 @@ pub struct PartitionFile {
     #[serde(default)]
     pub ghosts: GhostsFile,
     /// How a node uses border data that arrives `age` late: `"reset"` (overwrite the
-    /// ghost, hold the force) or `"predict"` (correct the ghost by its prediction error
-    /// at the sample's time, apply `F + Ḟ·age`); default `"reset"`.
+    /// ghost, hold the force), `"predict"` (correct the ghost by its prediction error
+    /// at the sample's time, apply `F + Ḟ·age`) or `"passive"` (predict over an energy
+    /// tank per border port), or `{"scheme": "passive", "tank": J}`; default `"passive"`
+    /// with a 1 J tank (bounded on the thesis scene up to τ = 20 ms, and the most
+    /// accurate there; see README "Coupling across partitions").
     #[serde(default)]
     pub coupling: CouplingFile,
     /// Owners of chosen border links, overriding the default rule (the thesis ring for
@@ -533,16 +536,46 @@ pub enum GhostsFile {
     Hold,
 }
 
-/// `partition.coupling`.
+/// `partition.coupling`: a scheme's name, or an object when it takes parameters.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum CouplingFile {
+    /// `"reset"`, `"predict"` or `"passive"` (with its default tank).
+    Name(CouplingName),
+    /// `{"scheme": …, "tank": J}`.
+    Spec(CouplingSpecFile),
+}
+
+impl Default for CouplingFile {
+    fn default() -> CouplingFile {
+        CouplingFile::Name(CouplingName::Passive)
+    }
+}
+
+/// The coupling schemes by name.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
-pub enum CouplingFile {
-    /// `"reset"` (default): every arriving state overwrites its ghost, every border
-    /// force is held until the next arrival.
+pub enum CouplingName {
+    /// `"reset"`: every arriving state overwrites its ghost, every border force is held
+    /// until the next arrival (the thesis's ghost equations).
     #[default]
     Reset,
     /// `"predict"`: delay-compensated ghosts and extrapolated border forces.
     Predict,
+    /// `"passive"` (the default of `partition.coupling`): `predict` gated by an energy
+    /// tank per border port.
+    Passive,
+}
+
+/// `partition.coupling` as an object.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CouplingSpecFile {
+    /// The scheme.
+    pub scheme: CouplingName,
+    /// `passive`: initial energy of each border port's tank [J], ≥ 0; default 1 J.
+    #[serde(default)]
+    pub tank: Option<f64>,
 }
 
 /// One entry of `partition.link_owners`.

@@ -239,7 +239,7 @@ pub enum GhostMode {
 ///
 /// Every sample a node receives is `age = t_arrival − t_sample` old. The schemes differ
 /// in what they do with that age (see `partition::coupling` for the equations).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Coupling {
     /// Each arriving state overwrites the ghost; each border force is held until the
     /// next arrival (the thesis's reading; unstable once the age reaches a few ms).
@@ -248,6 +248,14 @@ pub enum Coupling {
     /// ghost by its error against the ghost's own past at the sample's time, carried to
     /// now; forces and owner-side loads are applied as `F + Ḟ·age`.
     Predict,
+    /// `predict` over an energy account per border port: each side gives its bodies
+    /// only the energy the other side has taken in (as last reported) plus half the
+    /// initial tank; a passivity controller dissipates the rest. The coupling can then
+    /// create at most `tank` per port, whatever the delay, jitter or loss.
+    Passive {
+        /// Initial energy of each port's tank [J], split between its two sides.
+        tank: f64,
+    },
 }
 
 impl Coupling {
@@ -256,6 +264,20 @@ impl Coupling {
         match self {
             Coupling::Reset => "reset",
             Coupling::Predict => "predict",
+            Coupling::Passive { .. } => "passive",
+        }
+    }
+
+    /// Whether ghosts are corrected by prediction and forces extrapolated.
+    pub fn predicts(self) -> bool {
+        !matches!(self, Coupling::Reset)
+    }
+
+    /// The initial tank per port [J] of the `passive` scheme.
+    pub fn tank(self) -> Option<f64> {
+        match self {
+            Coupling::Passive { tank } => Some(tank),
+            _ => None,
         }
     }
 

@@ -58,7 +58,9 @@ fn thesis_tdma(duration: f64, extra: Value) -> Value {
         "model": {"grid": {"rows": 4, "cols": 4, "spacing": 1.8, "mass": 1.0, "size": 0.2}},
         "forces": [{"body": 1, "amplitude": [0, 0, 20], "omega": 2.0, "phase": 0.0,
                     "from": 0.0, "until": 12.0}],
-        "partition": {"quadrants": true},
+        // `reset` sends the smallest frames (no force rates, no energy reports): the
+        // 100 µs slots below were laid out for them.
+        "partition": {"quadrants": true, "coupling": "reset"},
         "channels": [
             {"name": "tau1", "tau": 0.005, "borders": [[1, 2], [1, 4]]},
             {"name": "tau2", "tau": 0.005, "borders": [[2, 3], [3, 4]]}

@@ -9,7 +9,7 @@ use super::tdma_node;
 use crate::kernel::time::NANOS_PER_SEC;
 use crate::kernel::SimTime;
 use crate::network::Channel;
-use crate::scenario::model::DataKind;
+use crate::scenario::model::{Coupling, DataKind};
 
 /// Bytes per `f64` on the wire.
 pub const BYTES_PER_FLOAT: u64 = 8;
@@ -81,8 +81,9 @@ pub fn broadcast_fragments(entries: usize, per: Option<usize>) -> usize {
 /// [`crate::network::Payload::floats`]).
 /// A state is position, velocity and the owner-side force (9 values; 19 with
 /// orientation, angular velocity and torque); a force is 3 values (6 with the torque);
-/// a coupling that sends rates adds one rate per force and torque value.
-pub fn floats_per_route(kind: DataKind, rigid: bool, rates: bool) -> usize {
+/// a coupling that sends rates adds one rate per force and torque value, and the
+/// `passive` one its energy report (one value).
+pub fn floats_per_route(kind: DataKind, rigid: bool, coupling: Coupling) -> usize {
     let loads = if rigid { 6 } else { 3 };
     let base = match (kind, rigid) {
         (DataKind::State, false) => 9,
@@ -90,7 +91,9 @@ pub fn floats_per_route(kind: DataKind, rigid: bool, rates: bool) -> usize {
         (DataKind::Force, false) => 3,
         (DataKind::Force, true) => 6,
     };
-    base + if rates { loads } else { 0 }
+    let rates = if coupling.sends_rates() { loads } else { 0 };
+    let energy = usize::from(coupling.tank().is_some());
+    base + rates + energy
 }
 
 /// The sending TDMA nodes of each channel (sorted, without repeats), from its routes.
@@ -154,14 +157,14 @@ impl FrameSizes {
     pub fn from_channels(
         channels: &[Channel],
         rigid: bool,
-        rates: bool,
+        coupling: Coupling,
         header_bytes: u64,
     ) -> FrameSizes {
         let mut floats: BTreeMap<(usize, usize), usize> = BTreeMap::new();
         for (c, ch) in channels.iter().enumerate() {
             for r in &ch.routes {
                 *floats.entry((tdma_node(r.from), c)).or_default() +=
-                    floats_per_route(r.kind, rigid, rates);
+                    floats_per_route(r.kind, rigid, coupling);
             }
         }
         let mut sizes = FrameSizes::new(header_bytes);
@@ -236,14 +239,21 @@ mod tests {
     fn float_counts_are_the_values_each_payload_carries() {
         // p, v, force (3 each); rigid adds q (4), ω, torque (3 each); rates one per
         // force or torque component.
-        assert_eq!(floats_per_route(DataKind::State, false, false), 9);
-        assert_eq!(floats_per_route(DataKind::State, true, false), 19);
-        assert_eq!(floats_per_route(DataKind::Force, false, false), 3);
-        assert_eq!(floats_per_route(DataKind::Force, true, false), 6);
-        assert_eq!(floats_per_route(DataKind::State, false, true), 12);
-        assert_eq!(floats_per_route(DataKind::State, true, true), 25);
-        assert_eq!(floats_per_route(DataKind::Force, false, true), 6);
-        assert_eq!(floats_per_route(DataKind::Force, true, true), 12);
+        let (r, p, e) = (
+            Coupling::Reset,
+            Coupling::Predict,
+            Coupling::Passive { tank: 1.0 },
+        );
+        assert_eq!(floats_per_route(DataKind::State, false, r), 9);
+        assert_eq!(floats_per_route(DataKind::State, true, r), 19);
+        assert_eq!(floats_per_route(DataKind::Force, false, r), 3);
+        assert_eq!(floats_per_route(DataKind::Force, true, r), 6);
+        assert_eq!(floats_per_route(DataKind::State, false, p), 12);
+        assert_eq!(floats_per_route(DataKind::State, true, p), 25);
+        assert_eq!(floats_per_route(DataKind::Force, false, p), 6);
+        assert_eq!(floats_per_route(DataKind::Force, true, p), 12);
+        assert_eq!(floats_per_route(DataKind::State, false, e), 13);
+        assert_eq!(floats_per_route(DataKind::Force, true, e), 13);
     }
 
     #[test]

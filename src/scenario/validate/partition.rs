@@ -8,7 +8,9 @@ use std::collections::BTreeMap;
 
 use super::bodies::Ids;
 use crate::error::{Error, Result};
-use crate::scenario::file::{CouplingFile, GhostsFile, GridFile, LinkOwnerFile, PartitionFile};
+use crate::scenario::file::{
+    CouplingFile, CouplingName, GhostsFile, GridFile, LinkOwnerFile, PartitionFile,
+};
 use crate::scenario::model::{BodySpec, Coupling, GhostMode, LinkSpec, PartitionSpec};
 
 /// Validates `partition` against the model (`grid` is the model's grid section, if it
@@ -61,11 +63,38 @@ pub(super) fn partition(
             GhostsFile::Integrate => GhostMode::Integrate,
             GhostsFile::Hold => GhostMode::Hold,
         },
-        coupling: match p.coupling {
-            CouplingFile::Reset => Coupling::Reset,
-            CouplingFile::Predict => Coupling::Predict,
-        },
+        coupling: coupling(&p.coupling)?,
     })
+}
+
+/// The default initial tank of the `passive` coupling per border port [J]: see
+/// `partition::coupling` for how it was chosen.
+pub const DEFAULT_TANK: f64 = 1.0;
+
+/// `partition.coupling`.
+fn coupling(c: &CouplingFile) -> Result<Coupling> {
+    let (name, tank) = match *c {
+        CouplingFile::Name(name) => (name, None),
+        CouplingFile::Spec(spec) => (spec.scheme, spec.tank),
+    };
+    match (name, tank) {
+        (CouplingName::Reset, None) => Ok(Coupling::Reset),
+        (CouplingName::Predict, None) => Ok(Coupling::Predict),
+        (CouplingName::Passive, tank) => {
+            let tank = tank.unwrap_or(DEFAULT_TANK);
+            if !(tank.is_finite() && tank >= 0.0) {
+                return Err(Error::invalid(
+                    "partition.coupling.tank",
+                    format!("must be a finite energy ≥ 0 J, got {tank}"),
+                ));
+            }
+            Ok(Coupling::Passive { tank })
+        }
+        (_, Some(_)) => Err(Error::invalid(
+            "partition.coupling.tank",
+            "only the \"passive\" scheme has a tank",
+        )),
+    }
 }
 
 /// `partition.nodes`: every body in exactly one node, no node empty.
