@@ -30,8 +30,10 @@ struct HeldForce {
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 struct CouplingState {
     scheme: Coupling,
-    /// Longest age a sample can legitimately have; extrapolations stop there.
+    /// Longest age a sample can legitimately have: how far back the ghosts' past is kept.
     horizon: SimTime,
+    /// How far forward a force is carried by its rate.
+    extrapolate: SimTime,
     dt: SimTime,
     /// Per ghost (`predict` with integrated ghosts): its recent past.
     history: Vec<GhostHistory>,
@@ -162,6 +164,7 @@ impl Node {
         let coupling = CouplingState {
             scheme,
             horizon,
+            extrapolate: scheme.extrapolate(),
             dt: scenario.dt,
             history: if predict_ghosts {
                 vec![GhostHistory::new(steps); ghost_count]
@@ -289,7 +292,7 @@ impl Node {
     /// with its rate (`predict`).
     fn held_load(&self, h: &HeldForce, t: SimTime) -> (Vector3<f64>, Vector3<f64>) {
         if self.coupling.scheme.predicts() {
-            h.value.at(t, self.coupling.horizon)
+            h.value.at(t, self.coupling.extrapolate)
         } else {
             (h.value.force, h.value.torque)
         }
@@ -344,7 +347,7 @@ impl Node {
                     port.report(*energy);
                 }
                 match self.coupling.scheme {
-                    Coupling::Predict | Coupling::Passive { .. } => {
+                    Coupling::Predict { .. } | Coupling::Passive { .. } => {
                         self.coupling.ghost_loads[k] = Extrapolated {
                             force: *force,
                             torque: *torque,
@@ -495,7 +498,7 @@ impl Node {
             }
         }
         for h in &self.held_forces {
-            let (f, tq) = h.value.at(t, self.coupling.horizon);
+            let (f, tq) = h.value.at(t, self.coupling.extrapolate);
             self.system.extra_force[h.body] += f;
             if rigid {
                 self.system.extra_torque[h.body] += tq;
@@ -503,7 +506,7 @@ impl Node {
         }
         for (k, load) in self.coupling.ghost_loads.iter().enumerate() {
             let g = self.owned + k;
-            let (f, tq) = load.at(t, self.coupling.horizon);
+            let (f, tq) = load.at(t, self.coupling.extrapolate);
             self.system.extra_force[g] = f;
             if rigid {
                 self.system.extra_torque[g] = tq;
@@ -533,7 +536,7 @@ impl Node {
                 .iter()
                 .filter(|hf| hf.body == b && hf.from == from)
             {
-                let (df, dt) = hf.value.at(t, self.coupling.horizon);
+                let (df, dt) = hf.value.at(t, self.coupling.extrapolate);
                 f += df;
                 tq += dt;
             }

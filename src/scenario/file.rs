@@ -512,9 +512,10 @@ pub struct PartitionFile {
     /// How a node uses border data that arrives `age` late: `"reset"` (overwrite the
     /// ghost, hold the force), `"predict"` (correct the ghost by its prediction error
     /// at the sample's time, apply `F + Ḟ·age`) or `"passive"` (predict over an energy
-    /// tank per border port), or `{"scheme": "passive", "tank": J}`; default `"passive"`
-    /// with a 1 J tank (bounded on the thesis scene up to τ = 20 ms, and the most
-    /// accurate there; see README "Coupling across partitions").
+    /// tank per border port), or an object `{"scheme": …, "tank": J, "extrapolate": s}`;
+    /// default `"passive"` with a 10 J tank and 0.01 s of extrapolation (bounded on the
+    /// thesis scene up to τ = 30 ms and the most accurate there; see README "Coupling
+    /// across partitions").
     #[serde(default)]
     pub coupling: CouplingFile,
     /// Owners of chosen border links, overriding the default rule (the thesis ring for
@@ -573,9 +574,14 @@ pub enum CouplingName {
 pub struct CouplingSpecFile {
     /// The scheme.
     pub scheme: CouplingName,
-    /// `passive`: initial energy of each border port's tank [J], ≥ 0; default 1 J.
+    /// `passive`: initial energy of each border port's tank [J], ≥ 0; default 10 J.
     #[serde(default)]
     pub tank: Option<f64>,
+    /// `predict` and `passive`: the longest time a border force or owner-side load is
+    /// carried forward by its rate [s], ≥ 0 (older samples are held at that value);
+    /// default 0.01 s.
+    #[serde(default)]
+    pub extrapolate: Option<f64>,
 }
 
 /// One entry of `partition.link_owners`.

@@ -246,8 +246,11 @@ pub enum Coupling {
     Reset,
     /// Delay-compensated ghosts and extrapolated border forces: a sample corrects the
     /// ghost by its error against the ghost's own past at the sample's time, carried to
-    /// now; forces and owner-side loads are applied as `F + Ḟ·age`.
-    Predict,
+    /// now; forces and owner-side loads are applied as `F + Ḟ·min(age, extrapolate)`.
+    Predict {
+        /// Longest time a force is carried forward by its rate [ns].
+        extrapolate: SimTime,
+    },
     /// `predict` over an energy account per border port: each side gives its bodies
     /// only the energy the other side has taken in (as last reported) plus half the
     /// initial tank; a passivity controller dissipates the rest. The coupling can then
@@ -255,6 +258,8 @@ pub enum Coupling {
     Passive {
         /// Initial energy of each port's tank [J], split between its two sides.
         tank: f64,
+        /// Longest time a force is carried forward by its rate [ns].
+        extrapolate: SimTime,
     },
 }
 
@@ -263,7 +268,7 @@ impl Coupling {
     pub fn name(self) -> &'static str {
         match self {
             Coupling::Reset => "reset",
-            Coupling::Predict => "predict",
+            Coupling::Predict { .. } => "predict",
             Coupling::Passive { .. } => "passive",
         }
     }
@@ -273,10 +278,20 @@ impl Coupling {
         !matches!(self, Coupling::Reset)
     }
 
+    /// How far forward a predicting scheme carries a force by its rate.
+    pub fn extrapolate(self) -> SimTime {
+        match self {
+            Coupling::Reset => SimTime::ZERO,
+            Coupling::Predict { extrapolate } | Coupling::Passive { extrapolate, .. } => {
+                extrapolate
+            }
+        }
+    }
+
     /// The initial tank per port [J] of the `passive` scheme.
     pub fn tank(self) -> Option<f64> {
         match self {
-            Coupling::Passive { tank } => Some(tank),
+            Coupling::Passive { tank, .. } => Some(tank),
             _ => None,
         }
     }

@@ -239,10 +239,14 @@ mod tests {
     fn float_counts_are_the_values_each_payload_carries() {
         // p, v, force (3 each); rigid adds q (4), ω, torque (3 each); rates one per
         // force or torque component.
+        let x = SimTime(10_000_000);
         let (r, p, e) = (
             Coupling::Reset,
-            Coupling::Predict,
-            Coupling::Passive { tank: 1.0 },
+            Coupling::Predict { extrapolate: x },
+            Coupling::Passive {
+                tank: 1.0,
+                extrapolate: x,
+            },
         );
         assert_eq!(floats_per_route(DataKind::State, false, r), 9);
         assert_eq!(floats_per_route(DataKind::State, true, r), 19);

@@ -6,6 +6,8 @@
 
 use std::collections::BTreeMap;
 
+use crate::kernel::SimTime;
+
 use super::bodies::Ids;
 use crate::error::{Error, Result};
 use crate::scenario::file::{
@@ -67,20 +69,45 @@ pub(super) fn partition(
     })
 }
 
-/// The default initial tank of the `passive` coupling per border port [J]: see
-/// `partition::coupling` for how it was chosen.
-pub const DEFAULT_TANK: f64 = 1.0;
+/// The default initial tank of the `passive` coupling per border port [J], and the
+/// default extrapolation horizon of `predict` and `passive` [s]: chosen on the thesis
+/// scene (README "Coupling across partitions" gives the measurements).
+pub const DEFAULT_TANK: f64 = 10.0;
+/// See [`DEFAULT_TANK`].
+pub const DEFAULT_EXTRAPOLATE: f64 = 0.01;
 
 /// `partition.coupling`.
 fn coupling(c: &CouplingFile) -> Result<Coupling> {
-    let (name, tank) = match *c {
-        CouplingFile::Name(name) => (name, None),
-        CouplingFile::Spec(spec) => (spec.scheme, spec.tank),
+    let (name, tank, extrapolate) = match *c {
+        CouplingFile::Name(name) => (name, None, None),
+        CouplingFile::Spec(spec) => (spec.scheme, spec.tank, spec.extrapolate),
     };
-    match (name, tank) {
-        (CouplingName::Reset, None) => Ok(Coupling::Reset),
-        (CouplingName::Predict, None) => Ok(Coupling::Predict),
-        (CouplingName::Passive, tank) => {
+    if name == CouplingName::Reset && extrapolate.is_some() {
+        return Err(Error::invalid(
+            "partition.coupling.extrapolate",
+            "the \"reset\" scheme holds forces and does not extrapolate",
+        ));
+    }
+    if name != CouplingName::Passive && tank.is_some() {
+        return Err(Error::invalid(
+            "partition.coupling.tank",
+            "only the \"passive\" scheme has a tank",
+        ));
+    }
+    let secs = extrapolate.unwrap_or(DEFAULT_EXTRAPOLATE);
+    let extrapolate = match SimTime::from_secs_f64(secs) {
+        Some(t) if (0.0..=10.0).contains(&secs) => t,
+        _ => {
+            return Err(Error::invalid(
+                "partition.coupling.extrapolate",
+                format!("must be a time between 0 and 10 s, got {secs}"),
+            ))
+        }
+    };
+    match name {
+        CouplingName::Reset => Ok(Coupling::Reset),
+        CouplingName::Predict => Ok(Coupling::Predict { extrapolate }),
+        CouplingName::Passive => {
             let tank = tank.unwrap_or(DEFAULT_TANK);
             if !(tank.is_finite() && tank >= 0.0) {
                 return Err(Error::invalid(
@@ -88,12 +115,8 @@ fn coupling(c: &CouplingFile) -> Result<Coupling> {
                     format!("must be a finite energy ≥ 0 J, got {tank}"),
                 ));
             }
-            Ok(Coupling::Passive { tank })
+            Ok(Coupling::Passive { tank, extrapolate })
         }
-        (_, Some(_)) => Err(Error::invalid(
-            "partition.coupling.tank",
-            "only the \"passive\" scheme has a tank",
-        )),
     }
 }
 
