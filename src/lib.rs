@@ -54,6 +54,7 @@ pub mod checkpoint;
 pub mod cli;
 pub mod control;
 pub mod cosim;
+pub mod coupling_study;
 pub mod error;
 pub mod kernel;
 pub mod multibody;

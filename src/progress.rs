@@ -68,6 +68,11 @@ impl Progress {
         self.bar.set_position(pos);
     }
 
+    /// Sets the total (when it is known only once the work is planned).
+    pub fn set_total(&mut self, total: u64) {
+        self.bar.set_length(total);
+    }
+
     /// Clears the bar.
     pub fn finish(&self) {
         if self.shown {

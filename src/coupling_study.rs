@@ -1,0 +1,455 @@
+//! The coupling study (`dsmcosim coupling`): every coupling scheme × delay τ × delay
+//! distribution on one partitioned scenario, each cell measured against the monolithic
+//! run and against the same scheme at τ = dt.
+//!
+//! ```text
+//!   scenario.json ──▶ base (partitioned, ideal channels, no controller, --duration)
+//!      ├─▶ monolithic reference (partition, channels and network dropped)
+//!      ├─▶ per scheme × distribution: τ = dt, latency 0 (the convergence reference)
+//!      └─▶ per scheme × distribution × τ: latency = τ (each sample arrives τ late)
+//!                    │ positions of the first and last body over [0, 3 s],
+//!                    │ kinetic energy over the undriven tail, max |w|, wall time
+//!                    ▼
+//!          coupling.csv, coupling.md, error_vs_tau.svg, max_w_vs_tau.svg
+//! ```
+//!
+//! Distributions (the thesis's two readings of which data travels on which channel):
+//! `space` keeps the scenario's channels and their borders, every one at period τ;
+//! `time` replaces them by a `state` and a `force` channel over every border, both at
+//! τ. Every cell runs on ideal channels with the default latency (= τ) and without the
+//! scenario's controller, so τ is the only thing that changes along a row.
+//!
+//! Errors are RMS over the steps of `[0, min(3 s, duration)]` of the position error of
+//! the first and of the last body (the larger of the two is reported): the net's motion
+//! is chaotic, and over 30 s every stable scheme (latency 0 included) ends metres away
+//! from the monolithic run, so a long-horizon error measures the chaos, not the
+//! coupling. Energy drift is the relative change of the kinetic energy
+//! `Σ ½ m |v|²` over the undriven tail (from the last force's switch-off to the end,
+//! when that tail is at least 1 s long). Cost per step is the wall time of the cell
+//! divided by that of `reset` at the same τ and distribution, the cells run one after
+//! the other on one core: the only non-deterministic column.
+
+use std::path::Path;
+use std::time::Instant;
+
+use nalgebra::Vector3;
+use serde_json::{json, Value};
+
+use crate::cosim::{CoSim, Observer, StepValues};
+use crate::error::{Error, Result};
+use crate::output::{create_dir_all, write_atomic};
+use crate::report::Scale;
+use crate::report::{write_line_plot, LinePlot, Series};
+use crate::scenario::{parse_str, Scenario};
+
+/// The schemes the study compares, as `partition.coupling` values.
+pub const SCHEMES: [&str; 3] = ["reset", "predict", "passive"];
+
+/// The delays of the study [s] (the thesis scene's range).
+pub const TAUS: [f64; 8] = [0.003, 0.005, 0.008, 0.010, 0.015, 0.020, 0.030, 0.050];
+
+/// The delay distributions.
+pub const DISTRIBUTIONS: [&str; 2] = ["space", "time"];
+
+/// Length of the short horizon the errors are measured over [s].
+pub const ERROR_HORIZON: f64 = 3.0;
+
+/// One cell of the study.
+#[derive(Debug, Clone)]
+pub struct Cell {
+    /// Coupling scheme.
+    pub scheme: &'static str,
+    /// Delay distribution.
+    pub distribution: &'static str,
+    /// Period and latency τ [s].
+    pub tau: f64,
+    /// The divergence error, if the run diverged.
+    pub error: Option<String>,
+    /// Largest |w| before the end or the divergence [m].
+    pub max_w: f64,
+    /// RMS position error vs the monolithic run over the short horizon [m].
+    pub err_mono: f64,
+    /// RMS position error vs the same scheme at τ = dt, latency 0 [m].
+    pub err_dt: f64,
+    /// Relative change of kinetic energy over the undriven tail (NaN without one).
+    pub energy_drift: f64,
+    /// Wall time per step [s].
+    pub wall_per_step: f64,
+}
+
+impl Cell {
+    /// Whether the run reached its end.
+    pub fn bounded(&self) -> bool {
+        self.error.is_none()
+    }
+}
+
+/// What one run recorded.
+struct Watch {
+    /// Bodies watched: first and last.
+    bodies: [usize; 2],
+    /// Last step time recorded into `positions` [ns].
+    horizon: u64,
+    positions: Vec<[Vector3<f64>; 2]>,
+    masses: Vec<f64>,
+    /// Start of the undriven tail [ns], if the scene has one.
+    tail: Option<u64>,
+    ke_tail_start: f64,
+    ke_end: f64,
+    max_w: f64,
+}
+
+impl Watch {
+    fn new(s: &Scenario) -> Watch {
+        let n = s.bodies.len();
+        let horizon = (ERROR_HORIZON.min(s.duration.as_secs_f64()) * 1e9) as u64;
+        let end = s.duration.0;
+        let last_force = s
+            .forces
+            .iter()
+            .map(|f| f.until.map_or(u64::MAX, |u| u.0))
+            .max();
+        let tail = last_force
+            .filter(|&u| u < end && end - u >= 1_000_000_000)
+            .map(|u| u.div_ceil(s.dt.0) * s.dt.0);
+        Watch {
+            bodies: [0, n - 1],
+            horizon,
+            positions: Vec::new(),
+            masses: s.bodies.iter().map(|b| b.mass).collect(),
+            tail,
+            ke_tail_start: f64::NAN,
+            ke_end: f64::NAN,
+            max_w: 0.0,
+        }
+    }
+
+    fn kinetic(&self, v: &[Vector3<f64>]) -> f64 {
+        v.iter()
+            .zip(&self.masses)
+            .map(|(v, m)| 0.5 * m * v.norm_squared())
+            .sum()
+    }
+}
+
+impl Observer for Watch {
+    fn on_step(&mut self, s: &StepValues) -> std::io::Result<()> {
+        let t = s.time.0;
+        if t <= self.horizon {
+            self.positions
+                .push([s.p[self.bodies[0]], s.p[self.bodies[1]]]);
+        }
+        if Some(t) == self.tail {
+            self.ke_tail_start = self.kinetic(s.v);
+        }
+        if s.last {
+            self.ke_end = self.kinetic(s.v);
+        }
+        for w in s.w {
+            self.max_w = self.max_w.max(w.abs());
+        }
+        Ok(())
+    }
+}
+
+/// A run's record and outcome.
+struct Ran {
+    watch: Watch,
+    error: Option<String>,
+    wall_per_step: f64,
+}
+
+fn run(s: &Scenario) -> Ran {
+    let mut watch = Watch::new(s);
+    let mut world = CoSim::new(s);
+    let start = Instant::now();
+    let result = world.run_to_end(&mut watch);
+    let wall = start.elapsed().as_secs_f64();
+    Ran {
+        watch,
+        error: result.err().map(|e| e.to_string()),
+        wall_per_step: wall / world.steps_done().max(1) as f64,
+    }
+}
+
+/// RMS over the common steps of the larger of the two bodies' position errors [m].
+fn rms_error(a: &Watch, b: &Watch) -> f64 {
+    let n = a.positions.len().min(b.positions.len());
+    if n == 0 || n < a.positions.len().max(b.positions.len()) {
+        // One of the runs stopped inside the horizon: no error to report.
+        return f64::NAN;
+    }
+    let mut sums = [0.0; 2];
+    for (pa, pb) in a.positions.iter().zip(&b.positions) {
+        for k in 0..2 {
+            sums[k] += (pa[k] - pb[k]).norm_squared();
+        }
+    }
+    sums.iter()
+        .map(|s| (s / n as f64).sqrt())
+        .fold(0.0, f64::max)
+}
+
+fn parse(v: &Value, what: &str) -> Result<Scenario> {
+    parse_str(&v.to_string(), what)
+}
+
+/// The cell's scenario: `base` with `scheme`, `distribution`, period `tau` and
+/// latency `latency` (`None` = τ).
+fn cell_scenario(
+    base: &Value,
+    scheme: &str,
+    distribution: &str,
+    tau: f64,
+    latency: Option<f64>,
+) -> Value {
+    let mut v = base.clone();
+    v["partition"]["coupling"] = json!(scheme);
+    let channels: Vec<Value> = match distribution {
+        "space" => base["channels"]
+            .as_array()
+            .cloned()
+            .unwrap_or_default()
+            .into_iter()
+            .map(|mut c| {
+                let o = c.as_object_mut().expect("ok: a channel is an object");
+                for k in ["latency", "phase", "kinds", "tau"] {
+                    o.remove(k);
+                }
+                c
+            })
+            .collect(),
+        _ => vec![
+            json!({"name": "state", "kinds": ["state"]}),
+            json!({"name": "force", "kinds": ["force"]}),
+        ],
+    };
+    v["channels"] = Value::Array(
+        channels
+            .into_iter()
+            .map(|mut c| {
+                c["tau"] = json!(tau);
+                if let Some(l) = latency {
+                    c["latency"] = json!(l);
+                }
+                c
+            })
+            .collect(),
+    );
+    v
+}
+
+/// Runs the study of the scenario at `path` (over `duration` seconds if given) and
+/// writes its files into `out`. `progress` is told each finished run.
+pub fn study(
+    path: &Path,
+    out: &Path,
+    duration: Option<f64>,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<Vec<Cell>> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let label = path.display().to_string();
+    let scenario = parse_str(&text, &label)?;
+    if scenario.partition.is_none() || scenario.links.is_empty() {
+        return Err(Error::invalid(
+            "partition",
+            "the coupling study needs a partitioned scenario",
+        ));
+    }
+    let mut base: Value = serde_json::from_str(&text)
+        .map_err(|e| Error::invalid("scenario", format!("not JSON: {e}")))?;
+    if let Some(d) = duration {
+        if !(d.is_finite() && d > 0.0 && d <= scenario.duration.as_secs_f64()) {
+            return Err(Error::invalid(
+                "--duration",
+                format!(
+                    "must be a positive number of seconds up to the scenario's {} s (got {d})",
+                    scenario.duration.as_secs_f64()
+                ),
+            ));
+        }
+        base["duration"] = json!(d);
+    }
+    let o = base.as_object_mut().expect("ok: a scenario is an object");
+    o.remove("controller");
+    o.insert("network".into(), json!({"kind": "ideal"}));
+    let dt = scenario.dt.as_secs_f64();
+    let mut mono = base.clone();
+    let m = mono.as_object_mut().expect("ok: an object");
+    for k in ["partition", "channels", "network"] {
+        m.remove(k);
+    }
+    // Validate every cell before anything runs.
+    let mono = parse(&mono, "monolithic reference")?;
+    let mut plans = Vec::new();
+    for &scheme in &SCHEMES {
+        for &distribution in &DISTRIBUTIONS {
+            let reference = parse(
+                &cell_scenario(&base, scheme, distribution, dt, Some(0.0)),
+                "τ = dt reference",
+            )?;
+            let cells = TAUS
+                .iter()
+                .map(|&tau| {
+                    let what = format!("{scheme}, {distribution}, τ = {tau} s");
+                    parse(
+                        &cell_scenario(&base, scheme, distribution, tau, None),
+                        &what,
+                    )
+                })
+                .collect::<Result<Vec<_>>>()?;
+            plans.push((scheme, distribution, reference, cells));
+        }
+    }
+    let total = 1 + plans.iter().map(|p| 1 + p.3.len()).sum::<usize>();
+    let mut done = 0;
+    let mut tick = |done: &mut usize| {
+        *done += 1;
+        progress(*done, total);
+    };
+    let mono = run(&mono);
+    tick(&mut done);
+    let mut cells = Vec::new();
+    for (scheme, distribution, reference, scenarios) in &plans {
+        let reference = run(reference);
+        tick(&mut done);
+        for (s, &tau) in scenarios.iter().zip(&TAUS) {
+            let r = run(s);
+            tick(&mut done);
+            let drift = (r.watch.ke_end - r.watch.ke_tail_start) / r.watch.ke_tail_start;
+            cells.push(Cell {
+                scheme,
+                distribution,
+                tau,
+                max_w: r.watch.max_w,
+                err_mono: rms_error(&r.watch, &mono.watch),
+                err_dt: rms_error(&r.watch, &reference.watch),
+                energy_drift: if r.error.is_none() { drift } else { f64::NAN },
+                error: r.error,
+                wall_per_step: r.wall_per_step,
+            });
+        }
+    }
+    create_dir_all(out)?;
+    write_csv(out, &cells)?;
+    write_markdown(out, &scenario.name, &cells)?;
+    write_plots(out, &scenario.name, &cells)?;
+    Ok(cells)
+}
+
+/// Wall time per step of `cell` relative to `reset` at the same τ and distribution.
+fn cost_ratio(cells: &[Cell], cell: &Cell) -> f64 {
+    cells
+        .iter()
+        .find(|c| c.scheme == "reset" && c.distribution == cell.distribution && c.tau == cell.tau)
+        .map_or(f64::NAN, |r| cell.wall_per_step / r.wall_per_step)
+}
+
+fn write_csv(out: &Path, cells: &[Cell]) -> Result<()> {
+    let mut text = String::from(
+        "scheme,distribution,tau,bounded,max_w,err_vs_monolithic_0_3s,err_vs_tau_dt_0_3s,\
+         energy_drift_undriven,cost_per_step_vs_reset,error\n",
+    );
+    for c in cells {
+        text.push_str(&format!(
+            "{},{},{},{},{},{},{},{},{},\"{}\"\n",
+            c.scheme,
+            c.distribution,
+            c.tau,
+            c.bounded(),
+            c.max_w,
+            c.err_mono,
+            c.err_dt,
+            c.energy_drift,
+            cost_ratio(cells, c),
+            c.error.clone().unwrap_or_default().replace('"', "'")
+        ));
+    }
+    write_atomic(&out.join("coupling.csv"), text.as_bytes())
+}
+
+fn fmt(x: f64) -> String {
+    if x.is_finite() {
+        format!("{x:.2e}")
+    } else {
+        "–".into()
+    }
+}
+
+fn write_markdown(out: &Path, name: &str, cells: &[Cell]) -> Result<()> {
+    let mut text = format!(
+        "# Coupling study of {name}\n\nEach sample arrives τ late (latency = τ). Errors: RMS \
+         over 0–3 s of the position error of the first and last body (the larger). \
+         Energy drift: relative change of kinetic energy over the undriven tail. Cost: \
+         wall time per step relative to `reset` at the same τ.\n\n\
+         | scheme | distribution | τ [ms] | bounded | max \\|w\\| [m] | err vs monolithic [m] \
+         | err vs τ = dt [m] | energy drift | cost vs reset |\n|---|---|---|---|---|---|---|---|---|\n"
+    );
+    for c in cells {
+        let bounded = match &c.error {
+            None => "yes".to_string(),
+            Some(e) => format!("no ({})", e.split(" on node").next().unwrap_or(e)),
+        };
+        text.push_str(&format!(
+            "| {} | {} | {} | {} | {:.3} | {} | {} | {} | {:.2} |\n",
+            c.scheme,
+            c.distribution,
+            c.tau * 1e3,
+            bounded,
+            c.max_w,
+            fmt(c.err_mono),
+            fmt(c.err_dt),
+            fmt(c.energy_drift),
+            cost_ratio(cells, c)
+        ));
+    }
+    write_atomic(&out.join("coupling.md"), text.as_bytes())
+}
+
+fn write_plots(out: &Path, name: &str, cells: &[Cell]) -> Result<()> {
+    let series = |value: &dyn Fn(&Cell) -> f64| -> Vec<Series> {
+        let mut all = Vec::new();
+        for &scheme in &SCHEMES {
+            for &distribution in &DISTRIBUTIONS {
+                let points = cells
+                    .iter()
+                    .filter(|c| c.scheme == scheme && c.distribution == distribution)
+                    .filter(|c| c.bounded())
+                    .map(|c| (c.tau * 1e3, value(c)))
+                    .collect();
+                all.push(Series::new(format!("{scheme}, {distribution}"), points));
+            }
+        }
+        all
+    };
+    let err = series(&|c| c.err_mono);
+    let title = format!("{name} — error vs delay per coupling (bounded runs only)");
+    write_line_plot(
+        &out.join("error_vs_tau.svg"),
+        &LinePlot {
+            title: &title,
+            x_label: "delay τ = latency [ms]",
+            y_label: "RMS position error vs monolithic, 0–3 s [m]",
+            series: &err,
+            x_scale: Scale::Log,
+            y_scale: Scale::Log,
+            step: false,
+            markers: true,
+        },
+    )?;
+    let max_w = series(&|c| c.max_w);
+    let title = format!("{name} — largest constraint violation vs delay (bounded runs only)");
+    write_line_plot(
+        &out.join("max_w_vs_tau.svg"),
+        &LinePlot {
+            title: &title,
+            x_label: "delay τ = latency [ms]",
+            y_label: "max |w| over the run [m]",
+            series: &max_w,
+            x_scale: Scale::Log,
+            y_scale: Scale::Linear,
+            step: false,
+            markers: true,
+        },
+    )
+}
