@@ -124,6 +124,18 @@ fn partitioned_fixed_delay_run_resumes_with_messages_in_flight() {
 }
 
 #[test]
+fn every_coupling_scheme_resumes_bit_for_bit() {
+    // The scheme's state (ghost histories, extrapolated loads, port accounts) is part of
+    // the checkpoint; the time distribution puts states and forces on two channels.
+    for coupling in ["reset", "predict", "passive"] {
+        let mut v = shipped("grid16_time_fixed");
+        v["duration"] = json!(2.0);
+        v["partition"]["coupling"] = json!(coupling);
+        check_resume(&format!("coupling_{coupling}"), &v, 0.5035, 3);
+    }
+}
+
+#[test]
 fn tdma_run_with_drift_and_jitter_resumes_bit_for_bit() {
     let mut v = shipped("tdma4_space_fixed");
     v["duration"] = json!(3.0);
