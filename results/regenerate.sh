@@ -13,7 +13,8 @@
 # `dsmcosim run scenarios/<name>.json --out results/<name>`.
 #
 # --studies also regenerates the speed-accuracy studies (results/tradeoff/, with its
-# subdirectories) and the stability map (results/stability/) with the commands the README
+# subdirectories), the stability map (results/stability/) and the coupling study
+# (results/coupling/) with the commands the README
 # gives; they take minutes and their wall-time columns change on every run, so the
 # default leaves them alone.
 set -uo pipefail
@@ -72,5 +73,6 @@ if [ $studies -eq 1 ]; then
   study results/tradeoff/tdma4_space_fixed tradeoff scenarios/tdma4_space_fixed.json --duration 3
   study results/tradeoff/grid16_rk4 tradeoff scenarios/grid16_rk4.json --duration 3
   study results/stability stability-map scenarios/grid16_monolithic.json --duration 12
+  study results/coupling coupling scenarios/grid16_space_fixed.json
 fi
 exit 0

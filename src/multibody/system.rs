@@ -251,18 +251,19 @@ impl System {
         }
     }
 
-    /// The time derivative of [`link_load_on`](Self::link_load_on): `d(n z)/dt =
-    /// ṅ z + n ż` [N/s] and `d(r × n z)/dt` [N·m/s], with `ṅ = (u − n (n·u)) / d` from
-    /// the anchors' relative velocity `u` in `state`, and `ż` the SMC law's rate at the
-    /// last evaluation (the slope the integrator used over the step that ended at
-    /// `state`). Under Baumgarte `z` is algebraic and has no rate of its own: only the
-    /// `ṅ z` part is returned.
-    pub fn link_load_rate_on(
+    /// [`link_load_on`](Self::link_load_on) (the same bits) with its time derivative:
+    /// `d(n z)/dt = ṅ z + n ż` [N/s] and `d(r × n z)/dt` [N·m/s], with
+    /// `ṅ = (u − n (n·u)) / d` from the anchors' relative velocity `u` in `state`, and
+    /// `ż` the SMC law's rate at the last evaluation (the slope the integrator used over
+    /// the step that ended at `state`). Under Baumgarte `z` is algebraic and has no rate
+    /// of its own: only the `ṅ z` part is returned. One pass for both, as a message
+    /// needs both.
+    pub fn link_load_and_rate_on(
         &self,
         state: &super::State,
         l: usize,
         body: usize,
-    ) -> (Vector3<f64>, Vector3<f64>) {
+    ) -> [Vector3<f64>; 4] {
         let link = &self.links[l];
         let (mut ra, mut rb) = (Vector3::zeros(), Vector3::zeros());
         let (mut wa, mut wb) = (Vector3::zeros(), Vector3::zeros());
@@ -272,10 +273,9 @@ impl System {
             wa = state.omega[link.a];
             wb = state.omega[link.b];
         }
-        let delta = state.p[link.a] + ra - state.p[link.b] - rb;
+        let n = (state.p[link.a] + ra - state.p[link.b] - rb).normalize();
+        let d = (state.p[link.a] + ra - state.p[link.b] - rb).norm();
         let u = state.v[link.a] + wa.cross(&ra) - state.v[link.b] - wb.cross(&rb);
-        let d = delta.norm();
-        let n = delta / d;
         let n_dot = (u - n * n.dot(&u)) / d;
         let (z, z_dot) = match self.stabilizer {
             Stabilizer::Smc { .. } => (state.z[l], self.k[0].z.get(l).copied().unwrap_or(0.0)),
@@ -284,9 +284,19 @@ impl System {
         let f_dot = n_dot * z + n * z_dot;
         let f = n * z;
         if body == link.a {
-            (f_dot, wa.cross(&ra).cross(&f) + ra.cross(&f_dot))
+            [
+                f,
+                ra.cross(&n) * z,
+                f_dot,
+                wa.cross(&ra).cross(&f) + ra.cross(&f_dot),
+            ]
         } else {
-            (-f_dot, -(wb.cross(&rb).cross(&f) + rb.cross(&f_dot)))
+            [
+                -n * z,
+                -rb.cross(&n) * z,
+                -f_dot,
+                -(wb.cross(&rb).cross(&f) + rb.cross(&f_dot)),
+            ]
         }
     }
 

@@ -149,10 +149,20 @@ pub struct Correction {
 }
 
 impl Correction {
-    /// The error of `received` against `ghost` (both at `sent`).
-    pub fn new(sent: SimTime, received: &GhostSample, ghost: &GhostSample) -> Correction {
-        let dq = UnitQuaternion::new_normalize(received.q)
-            * UnitQuaternion::new_normalize(ghost.q).inverse();
+    /// The error of `received` against `ghost` (both at `sent`); the rotation error only
+    /// where the bodies rotate (`rigid`).
+    pub fn new(
+        sent: SimTime,
+        received: &GhostSample,
+        ghost: &GhostSample,
+        rigid: bool,
+    ) -> Correction {
+        let dq = if rigid {
+            UnitQuaternion::new_normalize(received.q)
+                * UnitQuaternion::new_normalize(ghost.q).inverse()
+        } else {
+            UnitQuaternion::identity()
+        };
         Correction {
             sent,
             dp: received.p - ghost.p,
@@ -275,7 +285,12 @@ mod tests {
         }
         let mut received = sample(1.5);
         received.v.x = 3.0;
-        let c = Correction::new(SimTime(dt.0), &received, h.at(SimTime(dt.0), dt).unwrap());
+        let c = Correction::new(
+            SimTime(dt.0),
+            &received,
+            h.at(SimTime(dt.0), dt).unwrap(),
+            false,
+        );
         h.correct(&c, dt, false);
         // Step 0 untouched; from step 1 on: +0.5 m + 2 m/s · age.
         assert_eq!(h.at(SimTime(0), dt).unwrap().p.x, 0.0);

@@ -45,6 +45,10 @@ struct CouplingState {
     ports_out: Vec<PortAccount>,
     /// `passive`, per (local owned body, ghosting node): the body owner's side.
     ports_in: Vec<(usize, usize, PortAccount)>,
+    /// `passive`, per entry of `ports_in`: its held forces (indices into `held_forces`).
+    port_forces: Vec<Vec<usize>>,
+    /// Scratch: each held force's value at the current step (force, torque).
+    held_now: Vec<(Vector3<f64>, Vector3<f64>)>,
 }
 
 /// A ghost's last received state (for the `hold` mode).
@@ -183,20 +187,29 @@ impl Node {
                 Vec::new()
             },
             ports_in: Vec::new(),
+            port_forces: Vec::new(),
+            held_now: Vec::new(),
         };
         let mut coupling = coupling;
         if coupling.tank.is_some() {
-            for h in &held_forces {
-                if !coupling
+            for (i, h) in held_forces.iter().enumerate() {
+                match coupling
                     .ports_in
                     .iter()
-                    .any(|p| p.0 == h.body && p.1 == h.from)
+                    .position(|p| p.0 == h.body && p.1 == h.from)
                 {
-                    coupling
-                        .ports_in
-                        .push((h.body, h.from, PortAccount::default()));
+                    Some(p) => coupling.port_forces[p].push(i),
+                    None => {
+                        coupling
+                            .ports_in
+                            .push((h.body, h.from, PortAccount::default()));
+                        coupling.port_forces.push(vec![i]);
+                    }
                 }
             }
+        }
+        if scheme.predicts() {
+            coupling.held_now = vec![(Vector3::zeros(), Vector3::zeros()); held_forces.len()];
         }
         Node {
             index,
@@ -238,13 +251,16 @@ impl Node {
             }
         }
         for &l in &self.incident[i] {
-            let (f, tq) = self.system.link_load_on(&self.state, l, i);
-            force += f;
-            torque += tq;
             if rates {
-                let (fr, tr) = self.system.link_load_rate_on(&self.state, l, i);
+                let [f, tq, fr, tr] = self.system.link_load_and_rate_on(&self.state, l, i);
+                force += f;
+                torque += tq;
                 force_rate += fr;
                 torque_rate += tr;
+            } else {
+                let (f, tq) = self.system.link_load_on(&self.state, l, i);
+                force += f;
+                torque += tq;
             }
         }
         for h in self
@@ -303,11 +319,11 @@ impl Node {
     pub fn force_payload(&self, l: usize, g: usize) -> Payload {
         let ll = self.links.iter().position(|&x| x == l).unwrap_or_default();
         let body = self.local_body[&g];
-        let (force, torque) = self.system.link_load_on(&self.state, ll, body);
-        let (force_rate, torque_rate) = if self.coupling.scheme.sends_rates() {
-            self.system.link_load_rate_on(&self.state, ll, body)
+        let [force, torque, force_rate, torque_rate] = if self.coupling.scheme.sends_rates() {
+            self.system.link_load_and_rate_on(&self.state, ll, body)
         } else {
-            (Vector3::zeros(), Vector3::zeros())
+            let (f, t) = self.system.link_load_on(&self.state, ll, body);
+            [f, t, Vector3::zeros(), Vector3::zeros()]
         };
         Payload::Force {
             link: l,
@@ -379,7 +395,7 @@ impl Node {
                         history.at(sent, self.coupling.dt).cloned()
                     };
                     let own = own.unwrap_or(current);
-                    let c = Correction::new(sent, &received, &own);
+                    let c = Correction::new(sent, &received, &own, rigid);
                     history.correct(&c, self.coupling.dt, rigid);
                     let (ps, vs) = (&mut self.state.p[g], &mut self.state.v[g]);
                     if rigid {
@@ -497,11 +513,11 @@ impl Node {
                 self.system.extra_torque[b] = Vector3::zeros();
             }
         }
-        for h in &self.held_forces {
-            let (f, tq) = h.value.at(t, self.coupling.extrapolate);
-            self.system.extra_force[h.body] += f;
+        for (h, now) in self.held_forces.iter().zip(&mut self.coupling.held_now) {
+            *now = h.value.at(t, self.coupling.extrapolate);
+            self.system.extra_force[h.body] += now.0;
             if rigid {
-                self.system.extra_torque[h.body] += tq;
+                self.system.extra_torque[h.body] += now.1;
             }
         }
         for (k, load) in self.coupling.ghost_loads.iter().enumerate() {
@@ -517,26 +533,22 @@ impl Node {
             self.coupling.history[k].record(t, self.coupling.dt, sample);
         }
         if let Some(tank) = self.coupling.tank {
-            self.passivity(t, tank);
+            self.passivity(tank);
         }
     }
 
     /// `passive`: books each port's power for the step at `t` and, where a side would
     /// give its bodies more than its account holds, adds the passivity controller's
     /// force `−c v` (and torque `−c ω`) that removes exactly the excess.
-    fn passivity(&mut self, t: SimTime, tank: f64) {
+    fn passivity(&mut self, tank: f64) {
         let h = self.coupling.dt.as_secs_f64();
         let rigid = self.state.is_rigid();
         // Side 2: the border forces this node applies to its own bodies, per port.
         for p in 0..self.coupling.ports_in.len() {
-            let (b, from) = (self.coupling.ports_in[p].0, self.coupling.ports_in[p].1);
+            let b = self.coupling.ports_in[p].0;
             let (mut f, mut tq) = (Vector3::zeros(), Vector3::zeros());
-            for hf in self
-                .held_forces
-                .iter()
-                .filter(|hf| hf.body == b && hf.from == from)
-            {
-                let (df, dt) = hf.value.at(t, self.coupling.extrapolate);
+            for &i in &self.coupling.port_forces[p] {
+                let (df, dt) = self.coupling.held_now[i];
                 f += df;
                 tq += dt;
             }

@@ -329,9 +329,59 @@ fn render(plot: &LinePlot, target: &Path) -> Result<String> {
                 .legend(EmptyElement::at);
         }
         if !plot.series.is_empty() {
+            // The legend goes into the plot corner that covers the fewest drawn points
+            // (line vertices, points along each segment, markers).
+            let entries = plot.series.len().min(LEGEND_MAX + 1) as i32;
+            let label_w = plot
+                .series
+                .iter()
+                .take(LEGEND_MAX)
+                .map(|s| text_width(&s.label, LEGEND_PX))
+                .max()
+                .unwrap_or(0) as i32;
+            let (w, h) = (label_w + 50, entries * (LEGEND_PX as i32 + 6) + 16);
+            let ((left, top), (right, bottom)) = {
+                let (xr, yr) = chart.plotting_area().get_pixel_range();
+                ((xr.start, yr.start), (xr.end, yr.end))
+            };
+            let corners = [
+                (SeriesLabelPosition::UpperRight, (right - w - 8, top + 8)),
+                (SeriesLabelPosition::UpperLeft, (left + 8, top + 8)),
+                (
+                    SeriesLabelPosition::LowerRight,
+                    (right - w - 8, bottom - h - 8),
+                ),
+                (SeriesLabelPosition::LowerLeft, (left + 8, bottom - h - 8)),
+            ];
+            let mut covered = [0usize; 4];
+            for drawn in &prepared {
+                let points = drawn.lines.iter().flat_map(|l| {
+                    l.windows(2).flat_map(|seg| {
+                        (0..8).map(move |k| {
+                            let u = f64::from(k) / 8.0;
+                            (
+                                seg[0].0 + (seg[1].0 - seg[0].0) * u,
+                                seg[0].1 + (seg[1].1 - seg[0].1) * u,
+                            )
+                        })
+                    })
+                });
+                for p in points
+                    .chain(drawn.markers.iter().copied())
+                    .chain(drawn.lines.iter().filter_map(|l| l.last().copied()))
+                {
+                    let (px, py) = chart.backend_coord(&p);
+                    for (c, &(_, (x0, y0))) in corners.iter().enumerate() {
+                        if px >= x0 && px <= x0 + w && py >= y0 && py <= y0 + h {
+                            covered[c] += 1;
+                        }
+                    }
+                }
+            }
+            let best = (0..4).min_by_key(|&c| covered[c]).unwrap_or(0);
             chart
                 .configure_series_labels()
-                .position(SeriesLabelPosition::UpperRight)
+                .position(corners[best].0.clone())
                 .margin(8)
                 .label_font((FONT, LEGEND_PX))
                 .background_style(WHITE.mix(0.85))

@@ -513,7 +513,7 @@ pub struct PartitionFile {
     /// ghost, hold the force), `"predict"` (correct the ghost by its prediction error
     /// at the sample's time, apply `F + Ḟ·age`) or `"passive"` (predict over an energy
     /// tank per border port), or an object `{"scheme": …, "tank": J, "extrapolate": s}`;
-    /// default `"passive"` with a 1 J tank and 0.01 s of extrapolation (bounded on the
+    /// default `"passive"` with a 10 J tank and 0.01 s of extrapolation (bounded on the
     /// thesis scene up to τ = 30 ms and the most accurate there; see README "Coupling
     /// across partitions").
     #[serde(default)]
@@ -574,7 +574,7 @@ pub enum CouplingName {
 pub struct CouplingSpecFile {
     /// The scheme.
     pub scheme: CouplingName,
-    /// `passive`: initial energy of each border port's tank [J], ≥ 0; default 1 J.
+    /// `passive`: initial energy of each border port's tank [J], ≥ 0; default 10 J.
     #[serde(default)]
     pub tank: Option<f64>,
     /// `predict` and `passive`: the longest time a border force or owner-side load is

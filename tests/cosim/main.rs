@@ -93,13 +93,21 @@ fn four_nodes_with_zero_latency_and_tau_dt_follow_the_monolithic_run() {
 
 #[test]
 fn cost_rises_with_delay_on_the_thesis_scene() {
-    // 5 s under the default (passive) coupling, latency = τ: measured 0.0255, 0.0357
-    // and 0.221 m at τ = 1, 5, 15 ms (the prediction keeps 5 ms close to 1 ms; at
-    // 15 ms the age, 15–30 ms, exceeds the 10-ms extrapolation).
+    // 5 s under the default (passive) coupling, latency = τ. Its prediction removes the
+    // first-order effect of the data's age, so 1 ms and 5 ms cost the same to a few per
+    // cent (measured 0.0255 and 0.0250 m); at 15 ms the age (15–30 ms) exceeds what the
+    // 10-ms extrapolation covers and the cost is several times higher (0.0953 m).
     let cost = |tau: f64| run(&space(5.0, tau, tau, None)).0.mean_cost();
     let c = [0.001, 0.005, 0.015].map(cost);
     eprintln!("mean cost over 5 s at τ = 1, 5, 15 ms: {c:?}");
-    assert!(c[0] < c[1] && c[1] < c[2], "cost must rise with τ: {c:?}");
+    assert!(
+        (c[1] - c[0]).abs() < 0.1 * c[0],
+        "compensated: 1 and 5 ms agree: {c:?}"
+    );
+    assert!(
+        c[2] > 2.0 * c[0].max(c[1]),
+        "cost must rise at 15 ms: {c:?}"
+    );
 }
 
 #[test]
