@@ -3,7 +3,10 @@
 //! - [`layout`]: who owns which body and link, which bodies each node ghosts, and the
 //!   message routes between nodes;
 //! - [`node`]: one node's own [`System`](crate::multibody::System) over its bodies, its
-//!   ghosts and its links, and how it builds and applies messages.
+//!   ghosts and its links, and how it builds and applies messages;
+//! - [`coupling`]: what a node does with border data that arrives late (`reset`,
+//!   `predict`, `passive`): ghost histories and corrections, extrapolated forces, the
+//!   energy accounts of the border ports.
 //!
 //! A monolithic run is the one-node layout: the node's system is the whole model, it
 //! has no ghosts and sends nothing.

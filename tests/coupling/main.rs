@@ -357,3 +357,32 @@ fn a_pushed_pair_moves_as_half_a_t_squared_under_every_scheme() {
         assert!(w.max_w < 1e-9, "{coupling}: the link stays at rest length");
     }
 }
+
+#[test]
+fn lost_tdma_frames_never_let_the_passive_coupling_give_more_than_its_tanks() {
+    // The thesis scene on a TDMA network whose clocks drift 80 000 ppm: frames that
+    // leave their slot collide and are lost (measured: 1200 over 3 s), so forces go
+    // unrefreshed (held past the extrapolation horizon) and energy reports arrive late
+    // or not at all. Slots of 200 µs hold the default coupling's frames (346 B at
+    // 20 Mbit/s take 138 µs).
+    let mut v = thesis(3.0, "default", "space", 0.005);
+    v["network"] = json!({"kind": "tdma", "slot": 0.0002, "cycle": 0.005, "guard": 0.00002,
+                          "link_rate": 20e6, "header_bytes": 26, "drift_ppm": 80000.0});
+    let (world, w, error) = run(&v, &[]);
+    let lost = world.tdma().expect("a tdma world").network().lost();
+    let ports: usize = world.nodes().iter().map(|n| n.bodies.len() - n.owned).sum();
+    let (mut given, mut taken) = (0.0, 0.0);
+    for n in world.nodes() {
+        let e = n.port_energy();
+        given += e.given;
+        taken += e.taken;
+    }
+    eprintln!(
+        "{lost} frames lost; net port work {:.3} J (tanks {} J); max |w| {:.3} m; {error:?}",
+        given - taken,
+        ports * 10,
+        w.max_w
+    );
+    assert!(lost > 0, "the drift must cost frames");
+    assert!(given - taken <= ports as f64 * 10.0 + 1e-9);
+}
