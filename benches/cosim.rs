@@ -4,9 +4,10 @@
 //! every node with their messages) from a fresh world; throughput is in lock-steps, so
 //! criterion's `elem/s` divided by 1000 is the real-time factor.
 
-use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughput};
+mod common;
+
+use criterion::{criterion_group, criterion_main, Criterion};
 use dsmcosim::cosim::CoSim;
-use dsmcosim::kernel::SimTime;
 use dsmcosim::scenario::parse_str;
 use serde_json::{json, Value};
 
@@ -23,40 +24,30 @@ fn grid(n: usize, channels: Value, partition: Option<Value>) -> CoSim {
     CoSim::new(&parse_str(&v.to_string(), "bench").expect("valid bench scenario"))
 }
 
-fn bench_cosim(c: &mut Criterion) {
+const CASES: [&str; 4] = [
+    "grid4_monolithic",
+    "grid4_4nodes_space_5ms",
+    "grid8_monolithic",
+    "grid8_16nodes_5ms",
+];
+
+fn world(case: &str) -> CoSim {
     let space = json!([
         {"name": "tau1", "tau": 0.005, "borders": [[1, 2], [1, 4]]},
         {"name": "tau2", "tau": 0.005, "borders": [[2, 3], [3, 4]]}
     ]);
     let one = json!([{"name": "all", "tau": 0.005}]);
-    let cases = [
-        ("grid4_monolithic", grid(4, json!([]), None)),
-        (
-            "grid4_4nodes_space_5ms",
-            grid(4, space, Some(json!({"quadrants": true}))),
-        ),
-        ("grid8_monolithic", grid(8, json!([]), None)),
-        (
-            "grid8_16nodes_5ms",
-            grid(8, one, Some(json!({"quadrants": true}))),
-        ),
-    ];
-    let mut group = c.benchmark_group("cosim_1s");
-    group.throughput(Throughput::Elements(1000));
-    group.sample_size(20);
-    for (name, world) in cases {
-        group.bench_function(name, |b| {
-            b.iter_batched_ref(
-                || world.clone(),
-                |w| {
-                    w.advance_to(SimTime(1_000_000_000), &mut ())
-                        .expect("bench run")
-                },
-                BatchSize::LargeInput,
-            )
-        });
+    let quadrants = Some(json!({"quadrants": true}));
+    match case {
+        "grid4_monolithic" => grid(4, json!([]), None),
+        "grid4_4nodes_space_5ms" => grid(4, space, quadrants),
+        "grid8_monolithic" => grid(8, json!([]), None),
+        _ => grid(8, one, quadrants),
     }
-    group.finish();
+}
+
+fn bench_cosim(c: &mut Criterion) {
+    common::bench_one_second(c, "cosim_1s", &CASES, 20, world);
 }
 
 criterion_group!(benches, bench_cosim);

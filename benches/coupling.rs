@@ -14,14 +14,12 @@ mod common;
 
 use std::time::SystemTime;
 
-use criterion::{criterion_group, BatchSize, Criterion, Throughput};
+use criterion::{criterion_group, Criterion};
 use dsmcosim::cosim::CoSim;
-use dsmcosim::kernel::SimTime;
 use dsmcosim::scenario::parse_str;
 use serde_json::{json, Value};
 
 const GROUP: &str = "coupling_1s";
-const ONE_SECOND: SimTime = SimTime(1_000_000_000);
 const CASES: [&str; 5] = ["reset", "predict", "passive", "big_reset", "big_passive"];
 
 fn world(case: &str) -> CoSim {
@@ -60,20 +58,7 @@ fn big(scheme: &str) -> CoSim {
 }
 
 fn bench_coupling(c: &mut Criterion) {
-    let mut group = c.benchmark_group(GROUP);
-    group.throughput(Throughput::Elements(1000));
-    group.sample_size(40);
-    for case in CASES {
-        let w = world(case);
-        group.bench_function(case, |b| {
-            b.iter_batched_ref(
-                || w.clone(),
-                |w| w.advance_to(ONE_SECOND, &mut ()).expect("bench run"),
-                BatchSize::LargeInput,
-            )
-        });
-    }
-    group.finish();
+    common::bench_one_second(c, GROUP, &CASES, 40, world);
 }
 
 fn print_table(since: SystemTime) {

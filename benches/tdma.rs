@@ -18,7 +18,7 @@ mod common;
 
 use std::time::SystemTime;
 
-use criterion::{criterion_group, BatchSize, Criterion, Throughput};
+use criterion::{criterion_group, Criterion};
 use dsmcosim::cosim::CoSim;
 use dsmcosim::kernel::SimTime;
 use dsmcosim::scenario::parse_str;
@@ -60,20 +60,7 @@ fn world(case: &str) -> CoSim {
 }
 
 fn bench_tdma(c: &mut Criterion) {
-    let mut group = c.benchmark_group(GROUP);
-    group.throughput(Throughput::Elements(1000));
-    group.sample_size(20);
-    for case in CASES {
-        let w = world(case);
-        group.bench_function(case, |b| {
-            b.iter_batched_ref(
-                || w.clone(),
-                |w| w.advance_to(ONE_SECOND, &mut ()).expect("bench run"),
-                BatchSize::LargeInput,
-            )
-        });
-    }
-    group.finish();
+    common::bench_one_second(c, GROUP, &CASES, 20, world);
 }
 
 /// Median time [ns] criterion recorded for `case` of this bench's group since `since`.

@@ -3,10 +3,14 @@
 use std::path::PathBuf;
 use std::time::SystemTime;
 
+use criterion::{BatchSize, Criterion, Throughput};
+use dsmcosim::cosim::CoSim;
+use dsmcosim::kernel::SimTime;
 use serde_json::Value;
 
 /// Median time [ns] criterion recorded for `group/case` since `since`, if it ran in
 /// this run (an older estimate on disk is ignored).
+#[allow(dead_code)] // not every bench that shares this module prints ratios
 pub fn median(group: &str, case: &str, since: SystemTime) -> Option<f64> {
     let home = std::env::var_os("CRITERION_HOME")
         .map(PathBuf::from)
@@ -20,4 +24,33 @@ pub fn median(group: &str, case: &str, since: SystemTime) -> Option<f64> {
     }
     let v: Value = serde_json::from_str(&std::fs::read_to_string(path).ok()?).ok()?;
     v["median"]["point_estimate"].as_f64()
+}
+
+/// Benchmarks 1 s (1000 lock-steps) of each case's world in criterion group `group`,
+/// from a fresh copy of a world built outside the timed closure, `samples` samples.
+#[allow(dead_code)] // not every bench that shares this module times worlds
+pub fn bench_one_second(
+    c: &mut Criterion,
+    group: &str,
+    cases: &[&str],
+    samples: usize,
+    world: impl Fn(&str) -> CoSim,
+) {
+    let mut g = c.benchmark_group(group);
+    g.throughput(Throughput::Elements(1000));
+    g.sample_size(samples);
+    for &case in cases {
+        let w = world(case);
+        g.bench_function(case, |b| {
+            b.iter_batched_ref(
+                || w.clone(),
+                |w| {
+                    w.advance_to(SimTime(1_000_000_000), &mut ())
+                        .expect("bench run")
+                },
+                BatchSize::LargeInput,
+            )
+        });
+    }
+    g.finish();
 }

@@ -52,6 +52,27 @@ fn short_grid() -> Value {
     })
 }
 
+/// A shipped scenario as JSON, for a test to edit.
+fn shipped(name: &str) -> Value {
+    let text = std::fs::read_to_string(repo().join("scenarios").join(format!("{name}.json")))
+        .expect("shipped scenario");
+    serde_json::from_str(&text).expect("json")
+}
+
+/// Runs scenario `v` (written into `dir`) into `dir/out`; the process and the output
+/// directory.
+fn run_in(dir: &Path, v: &Value) -> (Output, PathBuf) {
+    let file = write_json(dir, "scenario.json", v);
+    let out = dir.join("out");
+    let o = run(&[
+        "run",
+        file.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    (o, out)
+}
+
 fn summary(dir: &Path) -> Value {
     serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).expect("summary"))
         .expect("summary is JSON")
@@ -264,14 +285,7 @@ fn divergence_exits_3_names_time_node_and_link_and_keeps_the_trace() {
     let mut v = short_grid();
     v["dt"] = json!(0.04);
     v["duration"] = json!(20.0);
-    let scen = write_json(&dir, "s.json", &v);
-    let out = dir.join("out");
-    let o = run(&[
-        "run",
-        scen.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (o, out) = run_in(&dir, &v);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(3), "{err}");
     assert!(err.contains("diverged at t = "), "{err}");
@@ -320,19 +334,10 @@ fn every_subcommand_has_help() {
 #[test]
 fn a_tdma_run_writes_the_network_outputs() {
     let dir = scratch("tdma_outputs");
-    let text = std::fs::read_to_string(repo().join("scenarios/tdma4_space_fixed.json"))
-        .expect("shipped scenario");
-    let mut v: Value = serde_json::from_str(&text).expect("json");
+    let mut v = shipped("tdma4_space_fixed");
     v["duration"] = json!(1.0);
     v["output"]["network_decimation"] = json!(50);
-    let file = write_json(&dir, "tdma.json", &v);
-    let out = dir.join("out");
-    let o = run(&[
-        "run",
-        file.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (o, out) = run_in(&dir, &v);
     assert!(o.status.success(), "{}", said(&o));
     let breaches = contract::problems(&out);
     assert!(breaches.is_empty(), "output contract: {breaches:#?}");
@@ -362,21 +367,12 @@ fn a_tdma_run_writes_the_network_outputs() {
 #[test]
 fn a_controlled_run_writes_the_output_contract() {
     let dir = scratch("controlled_outputs");
-    let text = std::fs::read_to_string(repo().join("scenarios/grid16_space_cp.json"))
-        .expect("shipped scenario");
-    let mut v: Value = serde_json::from_str(&text).expect("json");
+    let mut v = shipped("grid16_space_cp");
     v["duration"] = json!(2.0);
     v["controller"]["baselines"] = json!(["grid", "no_opt"]);
     v["controller"]["grid_step"] = json!(0.004);
     v["controller"]["surface_window"] = json!(1.0);
-    let file = write_json(&dir, "cp.json", &v);
-    let out = dir.join("out");
-    let o = run(&[
-        "run",
-        file.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (o, out) = run_in(&dir, &v);
     assert!(
         matches!(o.status.code(), Some(0) | Some(3)),
         "a finished or diverged run still writes its outputs: {}",

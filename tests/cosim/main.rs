@@ -312,6 +312,35 @@ fn integrated_ghosts_follow_their_body_between_arrivals_with_the_owner_side_forc
 }
 
 #[test]
+fn the_pushed_pair_moves_as_half_a_t_squared_under_every_coupling() {
+    // The link carries no load, so both bodies move as x0 + a dt² k(k−1)/2 under
+    // explicit Euler whatever the coupling does with the (exact) border data, and the
+    // ghost stays on its body. Latency 0: with latency τ nothing tells node 1 about
+    // body 2's push before the first sample arrives, under every scheme.
+    for coupling in ["reset", "predict", "passive"] {
+        let mut v = pushed_pair("integrate", 0.02);
+        v["partition"]["coupling"] = json!(coupling);
+        let mut world = CoSim::new(&scenario(&v));
+        for k in 0..=1000u64 {
+            world
+                .advance_to(SimTime(k * 1_000_000), &mut ())
+                .unwrap_or_else(|e| panic!("{coupling}: {e}"));
+            let (n1, n2) = (&world.nodes()[0], &world.nodes()[1]);
+            let shift = 2.0 * 1e-6 * (k * k.saturating_sub(1)) as f64 / 2.0;
+            let (x1, x2, ghost) = (n1.state.p[0].x, n2.state.p[0].x, n1.state.p[1].x);
+            assert!(
+                (x1 - shift).abs() < 1e-9 && (x2 - 1.8 - shift).abs() < 1e-9,
+                "{coupling}, step {k}: {x1}, {x2}"
+            );
+            assert!(
+                (ghost - x2).abs() < 1e-9,
+                "{coupling}, step {k}: ghost {ghost}"
+            );
+        }
+    }
+}
+
+#[test]
 fn held_ghosts_stay_at_the_received_state_between_arrivals() {
     let tau_steps = 20usize;
     let (owner, ghost, _) = ghost_and_owner("hold", tau_steps as f64 * 1e-3);

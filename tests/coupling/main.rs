@@ -1,6 +1,6 @@
 //! The coupling schemes across a delayed border (`partition.coupling`): energy, the
-//! order of convergence in τ, the thesis scene's bound and the closed-form pair
-//! (checkpoint/resume under each scheme: `tests/checkpoint`).
+//! order of convergence in τ, the thesis scene's bound, lost data (the closed-form pair
+//! under each scheme: `tests/cosim`; checkpoint/resume under each: `tests/checkpoint`).
 
 use dsmcosim::cosim::{CoSim, Observer, StepValues};
 use dsmcosim::scenario::{parse_str, Scenario};
@@ -310,53 +310,8 @@ fn the_passive_coupling_never_gives_more_energy_than_its_tanks() {
 }
 
 // ---------------------------------------------------------------------------------
-// Closed form
+// Lost data
 // ---------------------------------------------------------------------------------
-
-#[test]
-fn a_pushed_pair_moves_as_half_a_t_squared_under_every_scheme() {
-    // Two bodies 1.8 m apart, one per node, one link, both pushed by 2 N along x: the
-    // link carries no load and both move as x0 + a dt² k(k−1)/2 under explicit Euler,
-    // whatever the coupling does with the (exact) border data. Latency 0: with latency
-    // τ nothing tells node 1 about body 2's push before the first sample arrives, so
-    // its ghost lags and the link pulls during the first τ under every scheme.
-    for (coupling, latency) in [
-        ("reset", Some(0.0)),
-        ("predict", Some(0.0)),
-        ("passive", Some(0.0)),
-    ] {
-        let mut channel = json!({"name": "c", "tau": 0.02});
-        if let Some(l) = latency {
-            channel["latency"] = json!(l);
-        }
-        let v = json!({
-            "name": "pair", "seed": 1, "duration": 1.0, "dt": 0.001, "integrator": "euler",
-            "model": {
-                "bodies": [{"id": 1, "mass": 1.0, "size": 0.2, "position": [0, 0, 0]},
-                           {"id": 2, "mass": 1.0, "size": 0.2, "position": [1.8, 0, 0]}],
-                "links": [{"a": 1, "b": 2}]
-            },
-            "forces": [
-                {"body": 1, "amplitude": [2, 0, 0], "phase": std::f64::consts::FRAC_PI_2},
-                {"body": 2, "amplitude": [2, 0, 0], "phase": std::f64::consts::FRAC_PI_2}
-            ],
-            "partition": {"nodes": [[1], [2]], "coupling": coupling},
-            "channels": [channel]
-        });
-        let (_, w, error) = run(&v, &[0, 1]);
-        assert!(error.is_none(), "{coupling}: {error:?}");
-        for (k, p) in w.positions.iter().enumerate() {
-            let shift = 2.0 * 1e-6 * (k * k.saturating_sub(1)) as f64 / 2.0;
-            assert!(
-                (p[0].x - shift).abs() < 1e-9 && (p[1].x - 1.8 - shift).abs() < 1e-9,
-                "{coupling}, latency {latency:?}, step {k}: {:?}, {:?}",
-                p[0],
-                p[1]
-            );
-        }
-        assert!(w.max_w < 1e-9, "{coupling}: the link stays at rest length");
-    }
-}
 
 #[test]
 fn lost_tdma_frames_never_let_the_passive_coupling_give_more_than_its_tanks() {
