@@ -121,15 +121,8 @@ impl CoSim {
             .iter()
             .map(|c| Channel::new(c, &layout.routes))
             .collect();
-        let tdma_cycle = match &scenario.network {
-            NetworkSpec::Ideal => None,
-            NetworkSpec::Tdma(_) => TdmaLink::new(scenario, &channels)
-                .ok()
-                .map(|l| l.network().layout().cycle_len()),
-        };
-        let horizon = age_horizon(scenario, tdma_cycle);
         let nodes: Vec<Node> = (0..layout.nodes)
-            .map(|n| Node::new(scenario, &layout, n, horizon))
+            .map(|n| Node::new(scenario, &layout, n))
             .collect();
         let mut link_home = vec![(0, 0); scenario.links.len()];
         let mut body_home = vec![(0, 0); scenario.bodies.len()];
@@ -504,11 +497,7 @@ impl CoSim {
             }
             if let Some(msg) = self.message(sampled, c, r) {
                 if delivery <= self.scenario.duration {
-                    self.schedule(
-                        delivery,
-                        EventClass::Delivery,
-                        Event::Deliver(Box::new(msg)),
-                    );
+                    self.send(delivery, msg);
                 }
             }
         }
@@ -532,6 +521,16 @@ impl CoSim {
         })
     }
 
+    /// Puts `msg` in flight, to arrive at `at`. A state message also makes its receiver
+    /// keep its ghost's state of the sample time, for the coupling to compare the sample
+    /// with when it arrives.
+    fn send(&mut self, at: SimTime, msg: Message) {
+        if let crate::network::Payload::State { body, .. } = msg.payload {
+            self.nodes[msg.to].snapshot_ghost(body, msg.sent);
+        }
+        self.schedule(at, EventClass::Delivery, Event::Deliver(Box::new(msg)));
+    }
+
     fn schedule(&mut self, t: SimTime, class: EventClass, event: Event) {
         // Every event is scheduled at or after the current one, in a later or equal
         // class at equal time: the kernel cannot refuse it.
@@ -549,7 +548,7 @@ impl CoSim {
                 break;
             }
             if let Some(msg) = self.message(t, c, r) {
-                self.schedule(arrive, EventClass::Delivery, Event::Deliver(Box::new(msg)));
+                self.send(arrive, msg);
             }
         }
         let next = SimTime(t.0 + self.channels[c].tau.0);
@@ -698,29 +697,4 @@ impl CoSim {
             },
         }
     }
-}
-
-/// The longest age a border sample can legitimately have on `scenario`'s network, plus
-/// the longest gap until the next one: how far back a node keeps its ghosts' past and
-/// how far forward it extrapolates a force. Ideal channels: latency + period, at the
-/// largest period a controller may choose; TDMA: two cycles (a channel is served at
-/// least once per cycle, and a frame is delivered within its cycle).
-fn age_horizon(scenario: &Scenario, tdma_cycle: Option<SimTime>) -> SimTime {
-    if let Some(cycle) = tdma_cycle {
-        return SimTime(cycle.0.saturating_mul(2));
-    }
-    let tau_max = scenario
-        .controller
-        .as_ref()
-        .and_then(|c| SimTime::from_secs_f64(c.tau_max))
-        .unwrap_or(SimTime::ZERO);
-    scenario
-        .channels
-        .iter()
-        .map(|c| {
-            let tau = c.tau.max(tau_max);
-            SimTime(c.latency_for(tau).0.saturating_add(tau.0))
-        })
-        .max()
-        .unwrap_or(SimTime::ZERO)
 }

@@ -190,58 +190,58 @@ impl Correction {
     }
 }
 
-/// The recent past of one ghost: its state at every step time from `first` on, so that
-/// a sample can be compared with what the ghost was at the sample's time.
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+/// The ghost's own states at the times its body was sampled for it, kept until those
+/// samples arrive: a sample is compared with what the ghost itself was at the sample's
+/// time.
+///
+/// The co-simulation takes a snapshot of the receiving node's ghost whenever the owner
+/// samples the body for it (the event that sends the message), so the history holds one
+/// entry per sample in flight — not one per step — and its length is bounded by the
+/// samples the network can have in flight, whatever τ and latency are. Samples of one
+/// route arrive in the order they were taken, so an arrival consumes its snapshot and
+/// every older one.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct GhostHistory {
-    /// Time of `samples[0]`.
-    first: SimTime,
-    /// States at `first`, `first + dt`, …
-    samples: VecDeque<GhostSample>,
-    /// Most entries kept.
-    capacity: usize,
+    /// (sample time, the ghost's state then), oldest first.
+    snapshots: VecDeque<(SimTime, GhostSample)>,
 }
 
 impl GhostHistory {
-    /// An empty history keeping at most `capacity` steps (at least one).
-    pub fn new(capacity: usize) -> GhostHistory {
-        GhostHistory {
-            first: SimTime::ZERO,
-            samples: VecDeque::with_capacity(capacity.max(1)),
-            capacity: capacity.max(1),
+    /// Records the ghost's state at sample time `t` (not before the last snapshot).
+    pub fn snapshot(&mut self, t: SimTime, sample: GhostSample) {
+        self.snapshots.push_back((t, sample));
+    }
+
+    /// The snapshot taken at `t`, if it is kept.
+    pub fn at(&self, t: SimTime) -> Option<&GhostSample> {
+        self.snapshots
+            .iter()
+            .find(|(time, _)| *time == t)
+            .map(|(_, s)| s)
+    }
+
+    /// Applies `c` to every snapshot at or after its sample time, then forgets the
+    /// snapshots up to that time (their samples have arrived or never will).
+    pub fn correct(&mut self, c: &Correction, rigid: bool) {
+        for (t, s) in self.snapshots.iter_mut() {
+            if *t >= c.sent {
+                let rot = rigid.then_some((&mut s.q, &mut s.omega));
+                c.apply(*t, &mut s.p, &mut s.v, rot);
+            }
+        }
+        while self.snapshots.front().is_some_and(|(t, _)| *t <= c.sent) {
+            self.snapshots.pop_front();
         }
     }
 
-    /// Records the ghost's state at step time `t` (one step after the last record).
-    pub fn record(&mut self, t: SimTime, dt: SimTime, sample: GhostSample) {
-        if self.samples.is_empty() {
-            self.first = t;
-        }
-        if self.samples.len() == self.capacity {
-            self.samples.pop_front();
-            self.first = SimTime(self.first.0 + dt.0);
-        }
-        self.samples.push_back(sample);
+    /// Number of snapshots kept.
+    pub fn len(&self) -> usize {
+        self.snapshots.len()
     }
 
-    /// The recorded state at `t` (the oldest one when `t` is older than the history);
-    /// `None` when nothing at or before `t` is recorded.
-    pub fn at(&self, t: SimTime, dt: SimTime) -> Option<&GhostSample> {
-        if t < self.first {
-            return self.samples.front();
-        }
-        let k = ((t.0 - self.first.0) / dt.0) as usize;
-        self.samples.get(k)
-    }
-
-    /// Applies `c` to every recorded state at or after its sample time.
-    pub fn correct(&mut self, c: &Correction, dt: SimTime, rigid: bool) {
-        let skip = (c.sent.0.saturating_sub(self.first.0) / dt.0) as usize;
-        for (k, s) in self.samples.iter_mut().enumerate().skip(skip) {
-            let t = SimTime(self.first.0 + k as u64 * dt.0);
-            let rot = rigid.then_some((&mut s.q, &mut s.omega));
-            c.apply(t, &mut s.p, &mut s.v, rot);
-        }
+    /// Whether no snapshot is kept.
+    pub fn is_empty(&self) -> bool {
+        self.snapshots.is_empty()
     }
 }
 
@@ -259,44 +259,24 @@ mod tests {
     }
 
     #[test]
-    fn history_finds_each_step_and_forgets_the_oldest() {
-        let dt = SimTime(1_000_000);
-        let mut h = GhostHistory::new(3);
-        for k in 0..5u64 {
-            h.record(SimTime(k * dt.0), dt, sample(k as f64));
+    fn a_correction_shifts_later_snapshots_and_consumes_the_arrived_ones() {
+        let ms = |k: u64| SimTime(k * 1_000_000);
+        let mut h = GhostHistory::default();
+        for k in [0, 5, 10] {
+            h.snapshot(ms(k), sample(k as f64));
         }
-        // Kept: steps 2, 3, 4.
-        assert_eq!(h.at(SimTime(3 * dt.0), dt).unwrap().p.x, 3.0);
-        assert_eq!(h.at(SimTime(4 * dt.0), dt).unwrap().p.x, 4.0);
-        assert_eq!(
-            h.at(SimTime(0), dt).unwrap().p.x,
-            2.0,
-            "too old: the oldest"
-        );
-        assert!(h.at(SimTime(5 * dt.0), dt).is_none(), "not recorded yet");
-    }
-
-    #[test]
-    fn a_correction_carries_the_velocity_error_forward_in_time() {
-        let dt = SimTime(1_000_000);
-        let mut h = GhostHistory::new(10);
-        for k in 0..4u64 {
-            h.record(SimTime(k * dt.0), dt, sample(k as f64));
-        }
-        let mut received = sample(1.5);
+        assert_eq!(h.at(ms(5)).unwrap().p.x, 5.0);
+        assert!(h.at(ms(3)).is_none(), "only sample times are kept");
+        // The sample taken at 5 ms says the body was 0.5 m further and 2 m/s faster.
+        let mut received = sample(5.5);
         received.v.x = 3.0;
-        let c = Correction::new(
-            SimTime(dt.0),
-            &received,
-            h.at(SimTime(dt.0), dt).unwrap(),
-            false,
-        );
-        h.correct(&c, dt, false);
-        // Step 0 untouched; from step 1 on: +0.5 m + 2 m/s · age.
-        assert_eq!(h.at(SimTime(0), dt).unwrap().p.x, 0.0);
-        assert_eq!(h.at(SimTime(dt.0), dt).unwrap().p.x, 1.5);
-        assert!((h.at(SimTime(3 * dt.0), dt).unwrap().p.x - (3.5 + 2.0 * 0.002)).abs() < 1e-15);
-        assert_eq!(h.at(SimTime(3 * dt.0), dt).unwrap().v.x, 3.0);
+        let c = Correction::new(ms(5), &received, h.at(ms(5)).unwrap(), false);
+        h.correct(&c, false);
+        // 0 and 5 ms are consumed; 10 ms is shifted by 0.5 m + 2 m/s · 5 ms.
+        assert_eq!(h.len(), 1);
+        let later = h.at(ms(10)).unwrap();
+        assert!((later.p.x - (10.5 + 2.0 * 0.005)).abs() < 1e-12);
+        assert_eq!(later.v.x, 3.0);
     }
 
     #[test]

@@ -30,8 +30,6 @@ struct HeldForce {
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 struct CouplingState {
     scheme: Coupling,
-    /// Longest age a sample can legitimately have: how far back the ghosts' past is kept.
-    horizon: SimTime,
     /// How far forward a force is carried by its rate.
     extrapolate: SimTime,
     dt: SimTime,
@@ -85,9 +83,8 @@ pub struct Node {
 }
 
 impl Node {
-    /// Builds node `index` of `layout` for `scenario`; `horizon` is the longest age a
-    /// sample can have on the scene's network.
-    pub fn new(scenario: &Scenario, layout: &Layout, index: usize, horizon: SimTime) -> Node {
+    /// Builds node `index` of `layout` for `scenario`.
+    pub fn new(scenario: &Scenario, layout: &Layout, index: usize) -> Node {
         let owned = layout.owned[index].len();
         let bodies: Vec<usize> = layout.owned[index]
             .iter()
@@ -164,14 +161,12 @@ impl Node {
             .map_or(Coupling::Reset, |p| p.coupling);
         let ghost_count = bodies.len() - owned;
         let predict_ghosts = scheme.predicts() && ghosts == GhostMode::Integrate;
-        let steps = (horizon.0 / scenario.dt.0) as usize + 2;
         let coupling = CouplingState {
             scheme,
-            horizon,
             extrapolate: scheme.extrapolate(),
             dt: scenario.dt,
             history: if predict_ghosts {
-                vec![GhostHistory::new(steps); ghost_count]
+                vec![GhostHistory::default(); ghost_count]
             } else {
                 Vec::new()
             },
@@ -389,14 +384,9 @@ impl Node {
                 if let Some(history) = self.coupling.history.get_mut(k) {
                     // Predict: shift the ghost (and its past from `sent` on) by the
                     // sample's error against the ghost's own state at `sent`.
-                    let own = if sent >= state_time {
-                        None
-                    } else {
-                        history.at(sent, self.coupling.dt).cloned()
-                    };
-                    let own = own.unwrap_or(current);
+                    let own = history.at(sent).cloned().unwrap_or(current);
                     let c = Correction::new(sent, &received, &own, rigid);
-                    history.correct(&c, self.coupling.dt, rigid);
+                    history.correct(&c, rigid);
                     let (ps, vs) = (&mut self.state.p[g], &mut self.state.v[g]);
                     if rigid {
                         let rot = Some((&mut self.state.q[g], &mut self.state.omega[g]));
@@ -467,6 +457,19 @@ impl Node {
         }
     }
 
+    /// The owner of global body `g` samples it for this node at `t` (the message leaves
+    /// now): under `predict` and `passive` the node keeps its ghost's state of that time
+    /// until the sample arrives. `t` is the time whose state the sample carries, which is
+    /// also the time of this node's state.
+    pub fn snapshot_ghost(&mut self, g: usize, t: SimTime) {
+        let Some(local) = self.local(g) else { return };
+        if local < self.owned || self.coupling.history.is_empty() {
+            return;
+        }
+        let sample = self.ghost_sample(local);
+        self.coupling.history[local - self.owned].snapshot(t, sample);
+    }
+
     /// `passive`: this node's port accounts summed (both sides); zero otherwise.
     pub fn port_energy(&self) -> PortAccount {
         let mut sum = PortAccount::default();
@@ -527,10 +530,6 @@ impl Node {
             if rigid {
                 self.system.extra_torque[g] = tq;
             }
-        }
-        for k in 0..self.coupling.history.len() {
-            let sample = self.ghost_sample(self.owned + k);
-            self.coupling.history[k].record(t, self.coupling.dt, sample);
         }
         if let Some(tank) = self.coupling.tank {
             self.passivity(tank);
