@@ -42,7 +42,8 @@ pub enum Command {
         /// Scenario file (JSON).
         scenario: PathBuf,
     },
-    /// Run a scenario and write summary.json, trace.csv, epochs.csv and SVG plots.
+    /// Run a scenario and write summary.json, trace.csv, epochs.csv, SVG plots and a copy
+    /// of the scenario file (scenario.json).
     Run {
         /// Scenario file (JSON).
         scenario: PathBuf,
@@ -248,7 +249,14 @@ pub fn execute(command: Command) -> crate::Result<()> {
         } => {
             let options = run_options(checkpoint_every)?;
             let s = scenario::load(&scenario)?;
-            let outcome = crate::run::run_with(&s, &out, options)?;
+            let result = crate::run::run_with(&s, &out, options);
+            // The run directory keeps the file it ran (also beside a diverged run's
+            // outputs, which are a result too).
+            if result.is_ok() || matches!(result, Err(crate::Error::Diverged(_))) {
+                let text = std::fs::read(&scenario).map_err(|e| crate::Error::io(&scenario, e))?;
+                crate::output::write_atomic(&out.join("scenario.json"), &text)?;
+            }
+            let outcome = result?;
             report(&s.name, &outcome, &out);
             Ok(())
         }

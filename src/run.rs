@@ -282,6 +282,7 @@ fn write_summary(
         .collect();
     let summary = json!({
         "scenario": scenario.name,
+        "provenance": provenance(scenario),
         "seed": scenario.seed,
         "status": if error.is_some() { "diverged" } else { "ok" },
         "error": error,
@@ -331,6 +332,22 @@ fn write_summary(
     let mut text = serde_json::to_string_pretty(&summary).unwrap_or_default();
     text.push('\n');
     write_atomic(&out.join("summary.json"), text.as_bytes())
+}
+
+/// Who computed the run and from what: the tool's version, the git commit it was built
+/// from (null outside a checkout; `-dirty` when tracked files differed), the compiler,
+/// and BLAKE3 of the scenario as run (the validated model with every default applied,
+/// serialized as JSON), so two summaries with the same hash ran the same scenario.
+fn provenance(scenario: &Scenario) -> serde_json::Value {
+    let non_empty = |s: &'static str| (!s.is_empty()).then_some(s);
+    let model = serde_json::to_vec(scenario).unwrap_or_default();
+    json!({
+        "tool": "dsmcosim",
+        "version": env!("CARGO_PKG_VERSION"),
+        "git_commit": non_empty(env!("DSMCOSIM_GIT_COMMIT")),
+        "rustc": non_empty(env!("DSMCOSIM_RUSTC")),
+        "scenario_blake3": blake3::hash(&model).to_hex().to_string(),
+    })
 }
 
 fn plot(

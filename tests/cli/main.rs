@@ -105,6 +105,25 @@ fn run_writes_the_output_contract_and_is_deterministic() {
         assert!(o.stderr.is_empty(), "a short run is quiet on stderr");
     }
     let (sa, sb) = (summary(&a), summary(&b));
+    // Provenance: the tool, the compiler, the scenario as run; and the file itself.
+    assert_eq!(sa["provenance"]["tool"], json!("dsmcosim"));
+    assert_eq!(
+        sa["provenance"]["version"],
+        json!(env!("CARGO_PKG_VERSION"))
+    );
+    assert_eq!(
+        sa["provenance"]["scenario_blake3"], sb["provenance"]["scenario_blake3"],
+        "the same scenario hashes alike"
+    );
+    assert_eq!(
+        sa["provenance"]["scenario_blake3"].as_str().map(str::len),
+        Some(64)
+    );
+    assert_eq!(
+        std::fs::read(a.join("scenario.json")).unwrap(),
+        std::fs::read(&scen).unwrap(),
+        "the run directory keeps the file it ran"
+    );
     assert_eq!(
         sa["digest"], sb["digest"],
         "same scenario and seed, same digest"
