@@ -52,6 +52,7 @@
 pub mod check;
 pub mod checkpoint;
 pub mod cli;
+pub mod console;
 pub mod control;
 pub mod cosim;
 pub mod coupling_study;

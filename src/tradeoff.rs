@@ -191,7 +191,7 @@ pub fn command_tradeoff(path: &Path, out: &Path, duration: Option<f64>) -> Resul
             .filter(|v| f(&v.measured.status))
             .count()
     };
-    crate::cli::say(format_args!(
+    crate::console::say(format_args!(
         "{}: {} variants over {} s ({} ok, {} diverged, {} invalid), reference error {:.2e} m",
         study.name,
         study.variants.len(),
@@ -201,7 +201,7 @@ pub fn command_tradeoff(path: &Path, out: &Path, duration: Option<f64>) -> Resul
         count(&|s| matches!(s, Status::Invalid(_))),
         study.reference_error
     ));
-    crate::cli::say(format_args!("wrote {}", out.display()));
+    crate::console::say(format_args!("wrote {}", out.display()));
     Ok(())
 }
 
@@ -209,7 +209,7 @@ pub fn command_tradeoff(path: &Path, out: &Path, duration: Option<f64>) -> Resul
 pub fn command_stability_map(path: &Path, out: &Path, duration: Option<f64>) -> Result<()> {
     let map = stability_map(path, out, duration)?;
     let count = |o: u8| map.cells.iter().filter(|c| c.outcome == Some(o)).count();
-    crate::cli::say(format_args!(
+    crate::console::say(format_args!(
         "{}: {} cells over {} s: {} within ε, {} beyond ε, {} diverged",
         map.name,
         map.cells.len(),
@@ -218,7 +218,7 @@ pub fn command_stability_map(path: &Path, out: &Path, duration: Option<f64>) -> 
         count(1),
         count(2)
     ));
-    crate::cli::say(format_args!("wrote {}", out.display()));
+    crate::console::say(format_args!("wrote {}", out.display()));
     Ok(())
 }
 

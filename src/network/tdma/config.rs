@@ -1,7 +1,7 @@
 //! The TDMA configuration: slot geometry, link, clocks and processing jitter.
 
 use super::error::TdmaError;
-use super::frame::transmission_time;
+use crate::kernel::time::NANOS_PER_SEC;
 use crate::kernel::SimTime;
 
 /// Processing jitter added to every frame's latency (drawn per frame from the
@@ -192,9 +192,39 @@ fn check_ppm(field: &'static str, value: f64) -> Result<(), TdmaError> {
     Ok(())
 }
 
+/// Time on the wire of `bytes` at `rate` [bit/s]: `bytes · 8 / rate`, rounded up to the
+/// nanosecond (a frame never fits a slot by rounding); zero on an infinite rate.
+pub fn transmission_time(bytes: u64, rate: f64) -> SimTime {
+    if rate.is_infinite() || bytes == 0 {
+        return SimTime::ZERO;
+    }
+    let bits = u128::from(bytes) * 8;
+    if rate.fract() == 0.0 && rate <= (1u64 << 53) as f64 {
+        // Exact integer arithmetic for the usual whole-number rates.
+        let r = rate as u128;
+        let ns = (bits * u128::from(NANOS_PER_SEC)).div_ceil(r);
+        return SimTime(u64::try_from(ns).unwrap_or(u64::MAX));
+    }
+    let ns = (bits as f64 * NANOS_PER_SEC as f64 / rate).ceil();
+    SimTime(if ns >= u64::MAX as f64 {
+        u64::MAX
+    } else {
+        ns as u64
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn transmission_time_is_bits_over_rate_rounded_up() {
+        assert_eq!(transmission_time(100, 1e6), SimTime(800_000));
+        assert_eq!(transmission_time(1, 3e9), SimTime(3)); // 8/3 ns → 3
+        assert_eq!(transmission_time(1, 3.5e9), SimTime(3)); // 2.29 ns → 3
+        assert_eq!(transmission_time(1000, f64::INFINITY), SimTime::ZERO);
+        assert_eq!(transmission_time(0, 1e6), SimTime::ZERO);
+    }
 
     fn good() -> TdmaConfig {
         let mut c = TdmaConfig::new(3, SimTime(100_000), SimTime(10_000_000));

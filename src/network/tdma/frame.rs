@@ -4,10 +4,9 @@
 
 use std::collections::BTreeMap;
 
+pub use super::config::transmission_time;
 use super::config::TdmaConfig;
 use super::tdma_node;
-use crate::kernel::time::NANOS_PER_SEC;
-use crate::kernel::SimTime;
 use crate::network::Channel;
 use crate::scenario::model::{Coupling, DataKind};
 
@@ -25,27 +24,6 @@ pub fn frame_bytes(floats: usize, header_bytes: u64) -> u64 {
 /// Size of a server static frame carrying `entries` slot-list entries [B].
 pub fn list_broadcast_bytes(entries: usize, header_bytes: u64) -> u64 {
     header_bytes.saturating_add((entries as u64).saturating_mul(LIST_ENTRY_BYTES))
-}
-
-/// Time on the wire of `bytes` at `rate` [bit/s]: `bytes · 8 / rate`, rounded up to the
-/// nanosecond (a frame never fits a slot by rounding); zero on an infinite rate.
-pub fn transmission_time(bytes: u64, rate: f64) -> SimTime {
-    if rate.is_infinite() || bytes == 0 {
-        return SimTime::ZERO;
-    }
-    let bits = u128::from(bytes) * 8;
-    if rate.fract() == 0.0 && rate <= (1u64 << 53) as f64 {
-        // Exact integer arithmetic for the usual whole-number rates.
-        let r = rate as u128;
-        let ns = (bits * u128::from(NANOS_PER_SEC)).div_ceil(r);
-        return SimTime(u64::try_from(ns).unwrap_or(u64::MAX));
-    }
-    let ns = (bits as f64 * NANOS_PER_SEC as f64 / rate).ceil();
-    SimTime(if ns >= u64::MAX as f64 {
-        u64::MAX
-    } else {
-        ns as u64
-    })
 }
 
 /// Slot-list entries one static frame can carry at most: `None` for any number (an
@@ -202,15 +180,7 @@ impl FrameSizes {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn transmission_time_is_bits_over_rate_rounded_up() {
-        assert_eq!(transmission_time(100, 1e6), SimTime(800_000));
-        assert_eq!(transmission_time(1, 3e9), SimTime(3)); // 8/3 ns → 3
-        assert_eq!(transmission_time(1, 3.5e9), SimTime(3)); // 2.29 ns → 3
-        assert_eq!(transmission_time(1000, f64::INFINITY), SimTime::ZERO);
-        assert_eq!(transmission_time(0, 1e6), SimTime::ZERO);
-    }
+    use crate::kernel::SimTime;
 
     #[test]
     fn frame_is_header_plus_eight_bytes_per_float() {
