@@ -5,6 +5,8 @@
 //! integrated in lock-step on partitions ("nodes") that exchange border data over a
 //! network (ideal periodic channels or a TDMA schedule), with the communication delays
 //! re-chosen every measurement window by a Dynamic Simplex controller or a baseline.
+//! The method, with every choice and its reason, is `docs/method.md` in the repository;
+//! the module docs cite its sections as "method §N".
 //!
 //! ```text
 //!   scenario.json ─parse─▶ ScenarioFile ─validate─▶ Scenario ─build─▶ CoSim (kernel + nodes + network)

@@ -1,4 +1,4 @@
-//! The split of a model over computing nodes (SPEC section 3).
+//! The split of a model over computing nodes (method §3).
 //!
 //! - [`layout`]: who owns which body and link, which bodies each node ghosts, and the
 //!   message routes between nodes;

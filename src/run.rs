@@ -1,5 +1,5 @@
 //! One run of a scenario: the [`CoSim`] world driven to the end, recorded, measured
-//! and written to an output directory (SPEC section 8). A monolithic scenario is the
+//! and written to an output directory (method §8). A monolithic scenario is the
 //! one-node world.
 //!
 //! Written files: `trace.csv` (streamed, decimated), `epochs.csv`, `summary.json` and

@@ -1,4 +1,4 @@
-//! The cost of a measurement window (SPEC section 5):
+//! The cost of a measurement window (method §5):
 //! `C = Σ_l sqrt( (1/T) ∫_t^{t+T} w_l(u)² du )`, summed over every link of the model.
 //!
 //! The integral is the left Riemann sum over the integration steps whose start time lies

@@ -1,4 +1,4 @@
-//! Dynamic Simplex Method (Xiong & Jutan 2003), SPEC section 5: tracks a moving optimum
+//! Dynamic Simplex Method (Xiong & Jutan 2003), method §5: tracks a moving optimum
 //! with a simplex of fixed size, as a pure function of the costs it is told.
 //!
 //! The optimizer never runs anything itself. It is an ask/tell state machine: [`Dsm::ask`]
@@ -24,7 +24,7 @@
 //!   before infeasible, then lower cost, then lower vertex index. The best vertex is the
 //!   first in that order, the worst the last. Costs are compared with
 //!   [`f64::total_cmp`]; a told NaN is stored as `+∞`.
-//! - **Candidates.** Only `S_1 ..= S_m_r` compete (SPEC: "pick the `S_q`"); the starting
+//! - **Candidates.** Only `S_1 ..= S_m_r` compete (method §5: "continue from the `S_q`"); the starting
 //!   simplex `S_0` does not. They are ordered by `(number of infeasible vertices, mean
 //!   vertex cost, p)`, the lowest wins, so ties go to the earliest reflection. When every
 //!   vertex is feasible this is exactly "the lowest mean vertex cost".
@@ -152,13 +152,13 @@ pub enum SimplexError {
 pub type DsmError = SimplexError;
 
 /// The feasible set: a box `lower ≤ x ≤ upper` and optionally a linear budget on the
-/// inverses, `Σ k_i / x_i ≤ B` (SPEC section 5, CP: `k_i` weights [1], `B` [Hz] when `x`
+/// inverses, `Σ k_i / x_i ≤ B` (method §5, CP: `k_i` weights [1], `B` [Hz] when `x`
 /// are delays [s]).
 ///
 /// Stored as data so that the optimizers stay `Clone`. Bounds may be infinite when no
 /// budget is given. Every coordinate with `k_i > 0` must be positive to meet the budget.
 /// The set is convex (`k_i / x_i` is convex for `x_i > 0`), which the Nelder–Mead
-/// contractions rely on. Mapping the SPEC's CP (last delay eliminated through the budget)
+/// contractions rely on. Mapping the method’s CP (§5) (last delay eliminated through the budget)
 /// onto the controlled coordinates is the caller's business.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Feasible {
@@ -412,7 +412,7 @@ pub fn regular_simplex(centre: &[f64], edge: f64) -> Vec<Vec<f64>> {
 }
 
 /// The smallest simplex size that can follow an optimum moving at `speed` when every
-/// measurement takes `period`: `D_smin = (m_r + 1) v T` (SPEC section 5; one iteration
+/// measurement takes `period`: `D_smin = (m_r + 1) v T` (method §5; one iteration
 /// takes `m_r + 1` measurements, so the optimum moves at most `D_smin` per iteration).
 /// Units: `speed` [x/s], `period` [s], result [x].
 pub fn d_s_min(reflections: usize, speed: f64, period: f64) -> f64 {

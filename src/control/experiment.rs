@@ -1,6 +1,6 @@
 //! A controlled run: every measurement window the controller picks the delays the live
 //! plant runs at, and every baseline is evaluated on the same window from the same
-//! state (SPEC section 5).
+//! state (method §5).
 //!
 //! Per window `[t, t + T)`, at the window boundary (kernel class `Controller`: after the
 //! window ending at t is measured, before anything at t is sampled):

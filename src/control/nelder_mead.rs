@@ -1,4 +1,4 @@
-//! Static Nelder–Mead baseline (SPEC section 5): the textbook simplex search, which treats
+//! Static Nelder–Mead baseline (method §5): the textbook simplex search, which treats
 //! the cost as if it did not move with time. Same ask/tell interface and constraint
 //! handling as the [`Dsm`](super::dsm::Dsm).
 //!

@@ -1,5 +1,5 @@
 //! From a controlled vector `x` to channel delays, and the objective of a window
-//! (SPEC section 5).
+//! (method §5).
 //!
 //! - CP: `x` holds the first n − 1 delays; the last channel takes the rest of the
 //!   budget, `τ_n = k_n / (B − Σ_{i<n} k_i/x_i)`, raised to `τ_min` if the rest would

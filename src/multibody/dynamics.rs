@@ -1,4 +1,4 @@
-//! The rate function of the `(x, v, z)` ODE (SPEC section 2).
+//! The rate function of the `(x, v, z)` ODE (method §2).
 //!
 //! Stages, in this order because each needs the previous one's results:
 //! 1. body frames: world inertia `R I Rᵀ` and its inverse (rigid path);

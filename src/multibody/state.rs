@@ -40,7 +40,7 @@ pub struct Rates {
 }
 
 impl State {
-    /// The initial state of a scenario: bodies as given, `z = 0` (SPEC section 3).
+    /// The initial state of a scenario: bodies as given, `z = 0` (method §3).
     pub fn initial(scenario: &Scenario) -> State {
         let rigid = scenario.body_model == BodyModel::Rigid;
         let bodies = &scenario.bodies;

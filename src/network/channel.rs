@@ -1,4 +1,4 @@
-//! Ideal periodic channels (SPEC section 4): a channel samples its routes every τ and
+//! Ideal periodic channels (method §4): a channel samples its routes every τ and
 //! delivers each sample after its latency; the receiver holds a value until the next
 //! arrival.
 

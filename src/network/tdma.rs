@@ -1,4 +1,4 @@
-//! TDMA network model (SPEC section 4, "tdma"): the protocol core, independent of the
+//! TDMA network model (method §4, "tdma"): the protocol core, independent of the
 //! event kernel. The co-simulation drives it one cycle at a time
 //! ([`engine::TdmaNetwork::run_cycle`]) and turns each frame into events: sample the
 //! sender's data at the frame's `start`, deliver it at its `delivery` (lost frames

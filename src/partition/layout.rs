@@ -107,7 +107,7 @@ mod tests {
         let text = r#"{"name": "t", "seed": 1, "duration": 1.0, "dt": 0.001,
             "model": {"grid": {"rows": 4, "cols": 4, "spacing": 1.8, "mass": 1.0, "size": 0.2}}}"#;
         let mut s = crate::scenario::parse_str(text, "t").unwrap();
-        // Thesis quadrants and clockwise border ownership (SPEC section 3).
+        // Thesis quadrants and clockwise border ownership (method §3).
         let node = |id: usize| match id {
             1 | 2 | 5 | 6 => 0,
             3 | 4 | 7 | 8 => 1,

@@ -54,7 +54,7 @@ fn identity_quaternion() -> [f64; 4] {
     [1.0, 0.0, 0.0, 0.0]
 }
 
-/// A whole scenario file (SPEC section 7 plus our own optional sections).
+/// A whole scenario file (method §7 plus our own optional sections).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ScenarioFile {
@@ -228,7 +228,7 @@ pub struct SolverFile {
 #[serde(rename_all = "snake_case")]
 pub enum BodyModelFile {
     /// `"auto"` (default): point masses when every link anchor is at a body centre and
-    /// no body starts spinning (rotation cannot be excited, SPEC section 2), else rigid.
+    /// no body starts spinning (rotation cannot be excited, method §2), else rigid.
     #[default]
     Auto,
     /// `"rigid"`: always full rigid bodies.
@@ -241,7 +241,7 @@ pub enum BodyModelFile {
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ModelFile {
-    /// A generated `rows × cols` grid (SPEC section 3).
+    /// A generated `rows × cols` grid (method §3).
     #[serde(
         default,
         deserialize_with = "present",
@@ -484,7 +484,7 @@ impl Default for OutputFile {
 }
 
 /// `partition`: which computing node holds each body, and who owns the border links
-/// (SPEC section 3). Exactly one of `nodes` or `"quadrants": true`.
+/// (method §3). Exactly one of `nodes` or `"quadrants": true`.
 ///
 /// Nodes are numbered from 1 in the file (node 0 is the TDMA server): the i-th list of
 /// `nodes` is node i + 1.
@@ -603,7 +603,7 @@ pub enum NetworkKind {
     /// latency, nothing lost (the thesis's chapter-3 reading).
     #[default]
     Ideal,
-    /// `"tdma"`: the delays emerge from a TDMA schedule (SPEC section 4): sync slot,
+    /// `"tdma"`: the delays emerge from a TDMA schedule (method §4): sync slot,
     /// one static slot per node, a dynamic part that follows the slot list.
     Tdma,
 }
@@ -783,7 +783,7 @@ fn default_channel_k() -> f64 {
     DEFAULT_CHANNEL_K
 }
 
-/// One entry of `channels`: a periodic channel (SPEC section 4).
+/// One entry of `channels`: a periodic channel (method §4).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ChannelFile {
@@ -901,7 +901,7 @@ impl Default for DsmFile {
     }
 }
 
-/// `controller`: delay optimization (SPEC section 5). Its period is `measurement.period`.
+/// `controller`: delay optimization (method §5). Its period is `measurement.period`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ControllerFile {

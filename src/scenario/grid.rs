@@ -1,4 +1,4 @@
-//! The `grid R×C` generator (SPEC section 3).
+//! The `grid R×C` generator (method §3).
 //!
 //! A grid is expanded into the same explicit [`BodyFile`]/[`LinkFile`] entries a user
 //! could have written, so both kinds of model go through one validation path:

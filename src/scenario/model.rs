@@ -32,7 +32,7 @@ impl Integrator {
     }
 }
 
-/// Constraint stabilization method (SPEC section 2).
+/// Constraint stabilization method (method §2).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Stabilizer {
     /// Sliding-mode control with multipliers `z` in the ODE state.
@@ -224,7 +224,7 @@ pub struct OutputSpec {
     pub timeline_cycles: u64,
 }
 
-/// How a partition treats the far-end bodies of the border links it owns (SPEC section 3).
+/// How a partition treats the far-end bodies of the border links it owns (method §3).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum GhostMode {
     /// The node integrates its ghosts like its own bodies, driven by its own links and
@@ -341,7 +341,7 @@ pub struct PartitionSpec {
     pub coupling: Coupling,
 }
 
-/// A periodic communication channel (SPEC section 4).
+/// A periodic communication channel (method §4).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ChannelSpec {
     /// Name used in epochs.csv columns (`tau_<name>_requested`).
@@ -381,7 +381,7 @@ impl ChannelSpec {
 pub enum NetworkSpec {
     /// Ideal channels: sample every τ, deliver after the latency, nothing lost.
     Ideal,
-    /// A TDMA network (SPEC section 4): the delays emerge from a slot list.
+    /// A TDMA network (method §4): the delays emerge from a slot list.
     Tdma(Box<TdmaSpec>),
 }
 
@@ -396,7 +396,7 @@ pub struct TdmaSpec {
     pub decision_lag: SimTime,
 }
 
-/// The delay-optimization problem (SPEC section 5).
+/// The delay-optimization problem (method §5).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Problem {
     /// CP: minimize C subject to `Σ k_i/τ_i ≤ budget`; the controller sets the first
@@ -417,7 +417,7 @@ pub enum Problem {
     Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
 )]
 pub enum Method {
-    /// The Dynamic Simplex Method (SPEC section 5).
+    /// The Dynamic Simplex Method (method §5).
     Dsm,
     /// Every feasible grid point measured each window; the best is used ("true
     /// optimum").
@@ -454,7 +454,7 @@ pub enum Measure {
     Online,
 }
 
-/// The controller (SPEC section 5). Its period T is the measurement period.
+/// The controller (method §5). Its period T is the measurement period.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ControllerSpec {
     /// Method driving the live plant.

@@ -492,7 +492,7 @@ mod tests {
     use super::*;
     use crate::scenario::model::BodyModel;
 
-    /// The thesis scene (SPEC sections 3 and 7).
+    /// The thesis scene (method §3 and §7).
     const THESIS: &str = r#"{
         "name": "grid16_monolithic",
         "seed": 7,

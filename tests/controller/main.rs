@@ -1,4 +1,4 @@
-//! The delay controller (SPEC section 5): forks never disturb the live run, threads
+//! The delay controller (method §5): forks never disturb the live run, threads
 //! never change a result, every live choice respects the bounds and the budget.
 
 use dsmcosim::control::experiment::{self, Experiment};

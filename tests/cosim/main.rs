@@ -1,4 +1,4 @@
-//! The partitioned co-simulation with ideal channels (SPEC sections 3–6).
+//! The partitioned co-simulation with ideal channels (method §3–§6).
 
 use dsmcosim::cosim::{CoSim, Observer, StepValues};
 use dsmcosim::kernel::SimTime;
@@ -367,7 +367,7 @@ fn held_ghosts_stay_at_the_received_state_between_arrivals() {
 
 #[test]
 fn integrated_ghosts_hold_the_thesis_scene_better_than_held_ones() {
-    // SPEC section 3: `hold` ghosts ignore the owner-side load between arrivals, so the
+    // method §3: `hold` ghosts ignore the owner-side load between arrivals, so the
     // border constraints are corrected from stale positions. At τ = 5 ms the thesis
     // scene must show more violation with `hold` than with `integrate`.
     let integrate = space(3.0, 0.005, 0.005, Some(0.0));

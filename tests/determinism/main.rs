@@ -271,7 +271,7 @@ fn run_binary(scenario: &Path, out: &Path, threads: &str) -> String {
 }
 
 /// Parallel work (the controller's grid search and baselines on forks) must merge in a
-/// fixed order (SPEC section 6), so the thread count cannot matter; the uncontrolled
+/// fixed order (method §6), so the thread count cannot matter; the uncontrolled
 /// runs use no rayon, and must not start to depend on it.
 #[test]
 fn rayon_thread_count_does_not_change_the_digest() {

@@ -1,4 +1,4 @@
-//! The TDMA network inside the co-simulation (SPEC section 4, issue "TDMA network
+//! The TDMA network inside the co-simulation (method §4, issue "TDMA network
 //! model"): equivalence with ideal channels, losses beyond the guard, seeds, list
 //! decisions through the confirmation protocol.
 

@@ -212,7 +212,7 @@ fn quadrants(grid: Option<&GridFile>) -> Result<(usize, Vec<usize>, bool)> {
 /// The owner of a link between nodes `a` and `b` without an override: the common node
 /// of an internal link; on the thesis ring the node whose clockwise neighbour is the
 /// other (1 owns 1–2, 2 owns 2–3, 3 owns 3–4, 4 owns 4–1); else `lower`, the node of
-/// the link's lower-numbered body (SPEC section 3).
+/// the link's lower-numbered body (method §3).
 fn default_owner(a: usize, b: usize, lower: usize, ring: bool) -> usize {
     if a == b || (ring && (a + 1) % 4 == b) {
         a

@@ -1,4 +1,4 @@
-//! Quadrant layouts and link ownership against SPEC section 3.
+//! Quadrant layouts and link ownership against method §3.
 
 use crate::scenario::{parse_str, Scenario};
 
@@ -50,7 +50,7 @@ fn border_links(s: &Scenario) -> Vec<(u32, u32, usize)> {
         .collect()
 }
 
-/// The SPEC's ring ownership, by body-id pairs.
+/// The ring ownership of method §3, by body-id pairs.
 const RING: [(u32, u32, usize); 8] = [
     (2, 3, 1),
     (6, 7, 1),
