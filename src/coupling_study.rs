@@ -36,11 +36,12 @@ use std::time::Instant;
 use nalgebra::Vector3;
 use serde_json::{json, Value};
 
+mod write;
+
+use self::write::{fmt, write_csv, write_markdown, write_plots};
 use crate::cosim::{CoSim, Observer, StepValues};
 use crate::error::{Error, Result};
-use crate::output::{create_dir_all, write_atomic};
-use crate::report::Scale;
-use crate::report::{write_line_plot, LinePlot, Series};
+use crate::output::create_dir_all;
 use crate::scenario::{parse_str, Scenario};
 
 /// The schemes the study compares: a label and the `partition.coupling` value (JSON).
@@ -355,141 +356,4 @@ pub fn study(
     write_markdown(out, &scenario.name, &reference, &cells)?;
     write_plots(out, &scenario.name, &cells)?;
     Ok(cells)
-}
-
-/// Wall time per step of `cell` relative to `reset` at the same τ and distribution.
-fn cost_ratio(cells: &[Cell], cell: &Cell) -> f64 {
-    cells
-        .iter()
-        .find(|c| c.scheme == "reset" && c.distribution == cell.distribution && c.tau == cell.tau)
-        .map_or(f64::NAN, |r| cell.wall_per_step / r.wall_per_step)
-}
-
-fn write_csv(out: &Path, cells: &[Cell]) -> Result<()> {
-    let mut text = String::from(
-        "scheme,distribution,tau,bounded,max_w,err_vs_monolithic_0_3s,err_vs_tau_dt_0_3s,\
-         energy_drift_undriven,cost_per_step_vs_reset,error\n",
-    );
-    for c in cells {
-        text.push_str(&format!(
-            "{},{},{},{},{},{},{},{},{},\"{}\"\n",
-            c.scheme,
-            c.distribution,
-            c.tau,
-            c.bounded(),
-            c.max_w,
-            c.err_mono,
-            c.err_dt,
-            c.energy_drift,
-            cost_ratio(cells, c),
-            c.error.clone().unwrap_or_default().replace('"', "'")
-        ));
-    }
-    write_atomic(&out.join("coupling.csv"), text.as_bytes())
-}
-
-fn fmt(x: f64) -> String {
-    if x.is_finite() {
-        format!("{x:.2e}")
-    } else {
-        "–".into()
-    }
-}
-
-fn write_markdown(out: &Path, name: &str, reference: &str, cells: &[Cell]) -> Result<()> {
-    let mut text = format!(
-        "# Coupling study of {name}\n\nEach sample arrives τ late (latency = τ). Errors: RMS \
-         over 0–3 s of the position error of the first and last body (the larger). \
-         Energy drift: relative change of kinetic energy over the undriven tail. Cost: \
-         wall time per step relative to `reset` at the same τ. {reference}\n\n\
-         | scheme | distribution | τ [ms] | bounded | max \\|w\\| [m] | err vs monolithic [m] \
-         | err vs τ = dt [m] | energy drift | cost vs reset |\n|---|---|---|---|---|---|---|---|---|\n"
-    );
-    for c in cells {
-        let bounded = match &c.error {
-            None => "yes".to_string(),
-            Some(e) => format!("no ({})", e.split(" on node").next().unwrap_or(e)),
-        };
-        text.push_str(&format!(
-            "| {} | {} | {} | {} | {:.3} | {} | {} | {} | {:.2} |\n",
-            c.scheme,
-            c.distribution,
-            c.tau * 1e3,
-            bounded,
-            c.max_w,
-            fmt(c.err_mono),
-            fmt(c.err_dt),
-            fmt(c.energy_drift),
-            cost_ratio(cells, c)
-        ));
-    }
-    write_atomic(&out.join("coupling.md"), text.as_bytes())
-}
-
-fn write_plots(out: &Path, name: &str, cells: &[Cell]) -> Result<()> {
-    // One line per scheme and distribution; a distribution whose cells equal the
-    // space distribution's bit for bit (equal τ on every channel routes every message
-    // alike) is named in the space line's label instead of drawn on top of it.
-    let series = |value: &dyn Fn(&Cell) -> f64| -> Vec<Series> {
-        let mut all = Vec::new();
-        for &(scheme, _) in &SCHEMES {
-            let points = |distribution: &str| -> Vec<(f64, f64)> {
-                cells
-                    .iter()
-                    .filter(|c| c.scheme == scheme && c.distribution == distribution)
-                    .filter(|c| c.bounded())
-                    .map(|c| (c.tau * 1e3, value(c)))
-                    .collect()
-            };
-            let space = points(DISTRIBUTIONS[0]);
-            let mut same = Vec::new();
-            let mut other = Vec::new();
-            for &distribution in &DISTRIBUTIONS[1..] {
-                let p = points(distribution);
-                if p == space {
-                    same.push(distribution);
-                } else {
-                    other.push(Series::new(format!("{scheme}, {distribution}"), p));
-                }
-            }
-            let label = if same.is_empty() {
-                format!("{scheme}, space")
-            } else {
-                format!("{scheme}, space = {}", same.join(" = "))
-            };
-            all.push(Series::new(label, space));
-            all.extend(other);
-        }
-        all
-    };
-    let err = series(&|c| c.err_mono);
-    let title = format!("{name} — error vs delay per coupling (bounded runs only)");
-    write_line_plot(
-        &out.join("error_vs_tau.svg"),
-        &LinePlot {
-            title: &title,
-            x_label: "delay τ = latency [ms]",
-            y_label: "RMS position error vs monolithic, 0–3 s [m]",
-            series: &err,
-            x_scale: Scale::Log,
-            y_scale: Scale::Log,
-            step: false,
-            markers: true,
-        },
-    )?;
-    let max_w = series(&|c| c.max_w);
-    let title = format!("{name} — largest constraint violation vs delay (bounded runs only)");
-    write_line_plot(
-        &out.join("max_w_vs_tau.svg"),
-        &LinePlot {
-            title: &title,
-            x_label: "delay τ = latency [ms]",
-            y_label: "max |w| over the run [m]",
-            series: &max_w,
-            x_scale: Scale::Log,
-            y_scale: Scale::Linear,
-            step: false,
-            markers: true,
-        },
-    )
 }

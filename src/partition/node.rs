@@ -5,6 +5,8 @@ use std::collections::BTreeMap;
 
 use nalgebra::{Quaternion, Vector3};
 
+mod passivity;
+
 use super::coupling::{Correction, Extrapolated, GhostHistory, GhostSample, PortAccount};
 use super::Layout;
 use crate::kernel::SimTime;
@@ -470,19 +472,6 @@ impl Node {
         self.coupling.history[local - self.owned].snapshot(t, sample);
     }
 
-    /// `passive`: this node's port accounts summed (both sides); zero otherwise.
-    pub fn port_energy(&self) -> PortAccount {
-        let mut sum = PortAccount::default();
-        let ins = self.coupling.ports_in.iter().map(|p| &p.2);
-        for p in self.coupling.ports_out.iter().chain(ins) {
-            sum.taken += p.taken;
-            sum.given += p.given;
-            sum.received += p.received;
-            sum.dissipated += p.dissipated;
-        }
-        sum
-    }
-
     /// The ghost `g`'s (local) current state.
     fn ghost_sample(&self, g: usize) -> GhostSample {
         let rigid = self.state.is_rigid();
@@ -533,105 +522,6 @@ impl Node {
         }
         if let Some(tank) = self.coupling.tank {
             self.passivity(tank);
-        }
-    }
-
-    /// `passive`: books each port's power for the step at `t` and, where a side would
-    /// give its bodies more than its account holds, adds the passivity controller's
-    /// force `−c v` (and torque `−c ω`) that removes exactly the excess.
-    fn passivity(&mut self, tank: f64) {
-        let h = self.coupling.dt.as_secs_f64();
-        let rigid = self.state.is_rigid();
-        // Side 2: the border forces this node applies to its own bodies, per port.
-        for p in 0..self.coupling.ports_in.len() {
-            let b = self.coupling.ports_in[p].0;
-            let (mut f, mut tq) = (Vector3::zeros(), Vector3::zeros());
-            for &i in &self.coupling.port_forces[p] {
-                let (df, dt) = self.coupling.held_now[i];
-                f += df;
-                tq += dt;
-            }
-            let (v, w) = self.velocities(b);
-            let power = f.dot(&v) + if rigid { tq.dot(&w) } else { 0.0 };
-            let allowed = self.coupling.ports_in[p].2.book(power, h, tank);
-            self.damp(b, power - allowed, 1.0);
-        }
-        // Side 1: this node's border links to each ghost, on their own-body ends.
-        for k in 0..self.coupling.ports_out.len() {
-            let g = self.owned + k;
-            let mut power = 0.0;
-            let mut positive = 0.0;
-            for &l in &self.incident[g] {
-                let p_l = self.end_power(l, g);
-                power += p_l;
-                positive += p_l.max(0.0);
-            }
-            let allowed = self.coupling.ports_out[k].book(power, h, tank);
-            if power > allowed && positive > 0.0 {
-                // Every giving end gives the same fraction less.
-                let fraction = (power - allowed) / positive;
-                for i in 0..self.incident[g].len() {
-                    let l = self.incident[g][i];
-                    let p_l = self.end_power(l, g);
-                    if p_l > 0.0 {
-                        let a = self.far_end(l, g);
-                        self.damp(a, p_l, fraction);
-                    }
-                }
-            }
-        }
-    }
-
-    /// Velocity and angular velocity of local body `b` (zero ω on point masses).
-    fn velocities(&self, b: usize) -> (Vector3<f64>, Vector3<f64>) {
-        let w = self
-            .state
-            .omega
-            .get(b)
-            .copied()
-            .unwrap_or_else(Vector3::zeros);
-        (self.state.v[b], w)
-    }
-
-    /// The end of local link `l` that is not `g`.
-    fn far_end(&self, l: usize, g: usize) -> usize {
-        let link = &self.system.links()[l];
-        if link.a == g {
-            link.b
-        } else {
-            link.a
-        }
-    }
-
-    /// Power [W] link `l` delivers to its end opposite ghost `g`.
-    fn end_power(&self, l: usize, g: usize) -> f64 {
-        let a = self.far_end(l, g);
-        let (f, tq) = self.system.link_load_on(&self.state, l, a);
-        let (v, w) = self.velocities(a);
-        f.dot(&v)
-            + if self.state.is_rigid() {
-                tq.dot(&w)
-            } else {
-                0.0
-            }
-    }
-
-    /// Adds to body `b` the force `−c v` (torque `−c ω`) that removes `fraction` of
-    /// `excess` [W] of power.
-    fn damp(&mut self, b: usize, excess: f64, fraction: f64) {
-        if excess <= 0.0 {
-            return;
-        }
-        let (v, w) = self.velocities(b);
-        let rigid = self.state.is_rigid();
-        let speed2 = v.norm_squared() + if rigid { w.norm_squared() } else { 0.0 };
-        if speed2 == 0.0 {
-            return;
-        }
-        let c = excess * fraction / speed2;
-        self.system.extra_force[b] -= v * c;
-        if rigid {
-            self.system.extra_torque[b] -= w * c;
         }
     }
 
