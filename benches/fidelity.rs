@@ -23,7 +23,7 @@
 //! - lookahead baselines: one controlled window (1 s, DSM with lookahead, CP) with a
 //!   `grid` baseline against DSM alone, and DSM alone against the uncontrolled 4-node
 //!   scene. The grid's forks run in parallel on all cores, so that ratio depends on the
-//!   core count (2 on the machine the README quotes).
+//!   core count (2 on the machine docs/performance.md quotes).
 mod common;
 
 use std::path::PathBuf;

@@ -14,8 +14,8 @@
 #
 # --studies also regenerates the speed-accuracy studies (results/tradeoff/, with its
 # subdirectories), the stability map (results/stability/) and the coupling study
-# (results/coupling/) with the commands the README
-# gives; they take minutes and their wall-time columns change on every run, so the
+# (results/coupling/) with the commands docs/accuracy.md and docs/guide.md
+# give; they take minutes and their wall-time columns change on every run, so the
 # default leaves them alone.
 set -uo pipefail
 cd "$(dirname "$0")/.."

@@ -60,7 +60,7 @@ for n in names:
               f"{faster} of {len(rows)}; DSM: "
               f"{sum(float(r[f'tau_{chans[1]}_requested']) < float(r[f'tau_{chans[0]}_requested']) for r in rows)} of {len(rows)}")
 
-# Wall time of every stored run (the README's "Runs and time to regenerate" table).
+# Wall time of every stored run (results/README.md's "Runs and time to regenerate" table).
 print()
 print("| stored run | status | wall time [s] |")
 print("|---|---|---|")

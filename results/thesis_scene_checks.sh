@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Reproduces the figures quoted in README "What the thesis scene does in this model" and
+# Reproduces the figures quoted in docs/guide.md "What the thesis scene does in this model" and
 # "Partitioned co-simulation": variants of the shipped thesis scenarios (integrator, K,
 # delays, ghost mode) run at full trace resolution in a scratch directory.
 # Usage: results/thesis_scene_checks.sh [SCRATCH_DIR]

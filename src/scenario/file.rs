@@ -514,7 +514,7 @@ pub struct PartitionFile {
     /// at the sample's time, apply `F + Ḟ·age`) or `"passive"` (predict over an energy
     /// tank per border port), or an object `{"scheme": …, "tank": J, "extrapolate": s}`;
     /// default `"passive"` with a 10 J tank and 0.01 s of extrapolation (bounded on the
-    /// thesis scene up to τ = 30 ms and the most accurate there; see README "Coupling
+    /// thesis scene up to τ = 30 ms and the most accurate there; see docs/guide.md "Coupling
     /// across partitions").
     #[serde(default)]
     pub coupling: CouplingFile,
@@ -802,7 +802,7 @@ pub struct ChannelFile {
     pub latency: Option<f64>,
     /// Time of the first sample [s], ≥ 0, a whole number of nanoseconds, below τ
     /// (`ideal` networks only); default 0. A TDMA pair whose slot sits at this offset
-    /// delivers at the same times (see the README's TDMA section).
+    /// delivers at the same times (see docs/guide.md "TDMA network").
     #[serde(
         default,
         deserialize_with = "present",

@@ -1,6 +1,6 @@
 //! The output contract of `dsmcosim run SCENARIO --out DIR`, checked field by field.
 //!
-//! What a run directory must hold (README "Output files"):
+//! What a run directory must hold (docs/reference.md "Outputs"):
 //! - `summary.json`: `scenario`, `seed`, `digest` (64 hex digits), `steps`, `sim_seconds`,
 //!   `wall_seconds`, `max_constraint_violation`, `mean_cost`; on a controlled run also
 //!   `mean_cost_<method>` for every method with an objective column in epochs.csv;

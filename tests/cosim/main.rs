@@ -69,7 +69,7 @@ fn four_nodes_with_zero_latency_and_tau_dt_follow_the_monolithic_run() {
     // With τ = dt and zero latency every node sees the others' exact values at the
     // start of each step, so accelerations agree with the monolithic run; the
     // remaining difference comes from each node solving its own 6×6 J_s for ż instead
-    // of the global 24×24 one (the thesis's distributed SMC). Measured: see README.
+    // of the global 24×24 one (the thesis's distributed SMC). Measured: see docs/guide.md "Partitioned co-simulation".
     let (mono, a) = run(&thesis(2.0));
     let (part, b) = run(&space(2.0, 0.001, 0.001, Some(0.0)));
     assert_eq!(mono.layout().nodes, 1);

@@ -156,7 +156,7 @@ fn at_5_ms_the_default_coupling_is_as_tight_as_monolithic_and_close_to_it() {
 fn the_16_node_scene_stays_bounded_under_the_default_coupling() {
     // 8×8 grid on 16 quadrant nodes, body 1 then body 64 driven, one channel at τ
     // (latency τ); measured max |w| 0.204 m at 5 ms and 0.854 m at 20 ms (monolithic
-    // 0.231 m); 30 ms and beyond diverge (README "Coupling across partitions").
+    // 0.231 m); 30 ms and beyond diverge (docs/guide.md "Coupling across partitions").
     for tau in [0.005, 0.020] {
         let v = json!({
             "name": "grid64", "seed": 7, "duration": 30.0, "dt": 0.001,

@@ -4,7 +4,7 @@
 //!
 //! Boundaries measured on the thesis grid (4×4, body 1 driven by 20 N at 2 rad/s,
 //! explicit Euler, μ = 0.05 s, K = 10 m/s, ε = 0.1 m unless a test says otherwise) are
-//! stated at each test and in README ("Stability at the extremes").
+//! stated at each test and in docs/accuracy.md ("Stability at the extremes").
 //! `cargo test --release --test stability -- --nocapture` prints the measured values.
 
 use std::path::PathBuf;
@@ -413,7 +413,7 @@ fn delays_at_their_bounds() {
     eprintln!("τ = dt: max |w| = {:.3e} m", r.max_w);
     assert!(r.result.is_ok() && r.max_w <= 0.1);
     // The violation grows with the delay (stale border data), up to 20 ms, where the
-    // default coupling still holds the thesis load (README "Coupling across partitions").
+    // default coupling still holds the thesis load (docs/guide.md "Coupling across partitions").
     let mut previous = r.max_w;
     for tau in [5e-3, 2e-2] {
         let r = quiet(&partitioned(tau, 20.0));

@@ -71,7 +71,7 @@ pub(super) fn partition(
 
 /// The default initial tank of the `passive` coupling per border port [J], and the
 /// default extrapolation horizon of `predict` and `passive` [s]: chosen on the thesis
-/// scene (README "Coupling across partitions" gives the measurements).
+/// scene (docs/guide.md "Coupling across partitions" gives the measurements).
 pub const DEFAULT_TANK: f64 = 10.0;
 /// See [`DEFAULT_TANK`].
 pub const DEFAULT_EXTRAPOLATE: f64 = 0.01;
