@@ -4,9 +4,13 @@
 //! ```text
 //!  time t:  Measurement(t)   close the window ending at t (cost, τ, bandwidth)
 //!           Sample(c)        channel c samples its routes' values at t and schedules
-//!                            Delivery(t + latency); next Sample(c) at t + τ_c
-//!           Delivery(msg)    the receiver overwrites a ghost / holds a border force
-//!           PartitionStep    every node: rates at t → check → record → step to t + dt
+//!                            Delivery(t + latency); the receiver of a state keeps
+//!                            its ghost's state of t; next Sample(c) at t + τ_c
+//!           Delivery(msg)    the receiver uses the sample as its coupling says
+//!                            (reset: overwrite the ghost / hold the force; predict,
+//!                            passive: correct the ghost, extrapolate the force)
+//!           PartitionStep    every node: this step's border loads (and, passive, its
+//!                            port accounts) → rates at t → check → record → step
 //! ```
 //!
 //! On a `tdma` network ([`tdma`]) the channels do not sample on their own: a

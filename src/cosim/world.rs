@@ -116,13 +116,13 @@ impl CoSim {
     /// Builds the world of a validated scenario, with its first events scheduled.
     pub fn new(scenario: &Scenario) -> CoSim {
         let layout = Layout::new(scenario);
+        let nodes: Vec<Node> = (0..layout.nodes)
+            .map(|n| Node::new(scenario, &layout, n))
+            .collect();
         let channels: Vec<Channel> = scenario
             .channels
             .iter()
             .map(|c| Channel::new(c, &layout.routes))
-            .collect();
-        let nodes: Vec<Node> = (0..layout.nodes)
-            .map(|n| Node::new(scenario, &layout, n))
             .collect();
         let mut link_home = vec![(0, 0); scenario.links.len()];
         let mut body_home = vec![(0, 0); scenario.bodies.len()];
