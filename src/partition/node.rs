@@ -32,15 +32,10 @@ struct HeldForce {
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 struct CouplingState {
     scheme: Coupling,
-    /// How far forward a force is carried by its rate.
-    extrapolate: SimTime,
-    dt: SimTime,
     /// Per ghost (`predict` with integrated ghosts): its recent past.
     history: Vec<GhostHistory>,
     /// Per ghost (`predict`): the owner-side load with its rate.
     ghost_loads: Vec<Extrapolated>,
-    /// `passive`: the initial tank per port [J].
-    tank: Option<f64>,
     /// `passive`, per ghost: this node's side (link owner) of the ghost's port.
     ports_out: Vec<PortAccount>,
     /// `passive`, per (local owned body, ghosting node): the body owner's side.
@@ -165,8 +160,6 @@ impl Node {
         let predict_ghosts = scheme.predicts() && ghosts == GhostMode::Integrate;
         let coupling = CouplingState {
             scheme,
-            extrapolate: scheme.extrapolate(),
-            dt: scenario.dt,
             history: if predict_ghosts {
                 vec![GhostHistory::default(); ghost_count]
             } else {
@@ -177,7 +170,6 @@ impl Node {
             } else {
                 Vec::new()
             },
-            tank: scheme.tank(),
             ports_out: if scheme.tank().is_some() {
                 vec![PortAccount::default(); ghost_count]
             } else {
@@ -188,7 +180,7 @@ impl Node {
             held_now: Vec::new(),
         };
         let mut coupling = coupling;
-        if coupling.tank.is_some() {
+        if scheme.tank().is_some() {
             for (i, h) in held_forces.iter().enumerate() {
                 match coupling
                     .ports_in
@@ -236,7 +228,7 @@ impl Node {
     /// load's rate when the coupling sends rates.
     pub fn state_payload(&self, t: SimTime, g: usize, receiver: usize) -> Payload {
         let i = self.local_body[&g];
-        let rates = self.coupling.scheme.sends_rates();
+        let rates = self.coupling.scheme.predicts();
         let mut force = Vector3::zeros();
         let mut torque = Vector3::zeros();
         let mut force_rate = Vector3::zeros();
@@ -305,7 +297,7 @@ impl Node {
     /// with its rate (`predict`).
     fn held_load(&self, h: &HeldForce, t: SimTime) -> (Vector3<f64>, Vector3<f64>) {
         if self.coupling.scheme.predicts() {
-            h.value.at(t, self.coupling.extrapolate)
+            h.value.at(t, self.coupling.scheme.extrapolate())
         } else {
             (h.value.force, h.value.torque)
         }
@@ -316,7 +308,7 @@ impl Node {
     pub fn force_payload(&self, l: usize, g: usize) -> Payload {
         let ll = self.links.iter().position(|&x| x == l).unwrap_or_default();
         let body = self.local_body[&g];
-        let [force, torque, force_rate, torque_rate] = if self.coupling.scheme.sends_rates() {
+        let [force, torque, force_rate, torque_rate] = if self.coupling.scheme.predicts() {
             self.system.link_load_and_rate_on(&self.state, ll, body)
         } else {
             let (f, t) = self.system.link_load_on(&self.state, ll, body);
@@ -506,7 +498,7 @@ impl Node {
             }
         }
         for (h, now) in self.held_forces.iter().zip(&mut self.coupling.held_now) {
-            *now = h.value.at(t, self.coupling.extrapolate);
+            *now = h.value.at(t, self.coupling.scheme.extrapolate());
             self.system.extra_force[h.body] += now.0;
             if rigid {
                 self.system.extra_torque[h.body] += now.1;
@@ -514,13 +506,13 @@ impl Node {
         }
         for (k, load) in self.coupling.ghost_loads.iter().enumerate() {
             let g = self.owned + k;
-            let (f, tq) = load.at(t, self.coupling.extrapolate);
+            let (f, tq) = load.at(t, self.coupling.scheme.extrapolate());
             self.system.extra_force[g] = f;
             if rigid {
                 self.system.extra_torque[g] = tq;
             }
         }
-        if let Some(tank) = self.coupling.tank {
+        if let Some(tank) = self.coupling.scheme.tank() {
             self.passivity(tank);
         }
     }

@@ -273,7 +273,8 @@ impl Coupling {
         }
     }
 
-    /// Whether ghosts are corrected by prediction and forces extrapolated.
+    /// Whether ghosts are corrected by prediction and forces extrapolated (and so
+    /// whether messages carry the rates `Ḟ` of their forces).
     pub fn predicts(self) -> bool {
         !matches!(self, Coupling::Reset)
     }
@@ -294,11 +295,6 @@ impl Coupling {
             Coupling::Passive { tank, .. } => Some(tank),
             _ => None,
         }
-    }
-
-    /// Whether messages carry the rates `Ḟ` of their forces.
-    pub fn sends_rates(self) -> bool {
-        !matches!(self, Coupling::Reset)
     }
 }
 

@@ -69,7 +69,7 @@ pub fn floats_per_route(kind: DataKind, rigid: bool, coupling: Coupling) -> usiz
         (DataKind::Force, false) => 3,
         (DataKind::Force, true) => 6,
     };
-    let rates = if coupling.sends_rates() { loads } else { 0 };
+    let rates = if coupling.predicts() { loads } else { 0 };
     let energy = usize::from(coupling.tank().is_some());
     base + rates + energy
 }

@@ -25,7 +25,7 @@ impl Node {
     /// give its bodies more than its account holds, adds the passivity controller's
     /// force `−c v` (and torque `−c ω`) that removes exactly the excess.
     pub(super) fn passivity(&mut self, tank: f64) {
-        let h = self.coupling.dt.as_secs_f64();
+        let h = self.system.dt().as_secs_f64();
         let rigid = self.state.is_rigid();
         // Side 2: the border forces this node applies to its own bodies, per port.
         for p in 0..self.coupling.ports_in.len() {
