@@ -341,3 +341,24 @@ fn lost_tdma_frames_never_let_the_passive_coupling_give_more_than_its_tanks() {
     assert!(lost > 0, "the drift must cost frames");
     assert!(given - taken <= ports as f64 * 10.0 + 1e-9);
 }
+
+#[test]
+fn a_frame_too_long_under_a_predicting_coupling_says_how_to_fit_it() {
+    // 100 µs slots at 25 Mbit/s fit `reset`'s 218-byte frames, not the default
+    // coupling's 346 bytes (force rates and energy reports added).
+    let mut v = thesis(1.0, "default", "space", 0.005);
+    v["network"] = json!({"kind": "tdma", "slot": 0.0001, "cycle": 0.005, "guard": 0.00001,
+                          "link_rate": 25e6, "header_bytes": 26});
+    let e = parse_str(&v.to_string(), "<test>")
+        .expect_err("the frames do not fit")
+        .to_string();
+    assert!(
+        e.contains("network.slot") && e.contains("\"coupling\": \"reset\""),
+        "{e}"
+    );
+    v["partition"]["coupling"] = json!("reset");
+    assert!(
+        parse_str(&v.to_string(), "<test>").is_ok(),
+        "reset's frames fit"
+    );
+}

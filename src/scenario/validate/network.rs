@@ -221,7 +221,23 @@ pub(super) fn check_tdma(s: &Scenario) -> Result<()> {
         .iter()
         .map(|c| crate::network::Channel::new(c, &layout.routes))
         .collect();
-    let link = TdmaLink::new(s, &channels).map_err(tdma_error)?;
+    let link = TdmaLink::new(s, &channels).map_err(|e| {
+        // A frame that is too long under a predicting coupling may fit under `reset`,
+        // whose messages carry no force rates and no energy reports: say so.
+        let predicts = s.partition.as_ref().is_some_and(|p| p.coupling.predicts());
+        let hint = matches!(e, TdmaError::FrameTooLong { .. }) && predicts;
+        match tdma_error(e) {
+            Error::Invalid { path, message } if hint => Error::Invalid {
+                path,
+                message: format!(
+                    "{message}; the partition's coupling sends force rates (and, passive, \
+                     energy reports) with every message: widen the slot, raise the link \
+                     rate, or use \"coupling\": \"reset\""
+                ),
+            },
+            other => other,
+        }
+    })?;
     let Some(c) = &s.controller else {
         return Ok(());
     };
