@@ -10,20 +10,26 @@
 //!   by the link force at once, the real body only `age` later), and a jump in `ẇ`
 //!   enters the sliding surface directly: the stiff SMC loop pumps energy into the net
 //!   and the run diverges once the age reaches a few milliseconds.
-//! - **`predict`**: the ghost keeps its own trajectory. On arrival the node compares the
-//!   sample with what the ghost itself was at `t_s` ([`GhostHistory`]) and shifts the
-//!   ghost (and its recorded past from `t_s` on) by that error carried to now:
+//! - **`predict`**: the ghost keeps its own trajectory. The node keeps its ghost's
+//!   state of every sample time until that sample arrives ([`GhostHistory`]); on
+//!   arrival it shifts the ghost (and the states it still keeps from `t_s` on) by the
+//!   sample's error against the ghost's own state at `t_s`, carried to now:
 //!   `p += e_p + e_v·(t − t_s)`, `v += e_v` (orientation: the rotation error, angular
 //!   velocity: its error). Forces travel with their rates, `Ḟ = ṅ z + n ż` for a link
 //!   (the exact derivative of the link load; `ż` is the SMC law's rate that the
 //!   integrator used over the step ending at `t_s`) plus the external forces' analytic
-//!   rates; the receiver applies `F + Ḟ·age` ([`Extrapolated`]), so a force that is τ
-//!   old is wrong to second order in τ instead of first.
+//!   rates; the receiver applies `F + Ḟ·min(age, extrapolate)` ([`Extrapolated`]), so a
+//!   force that is τ old is wrong to second order in τ instead of first. Past
+//!   `extrapolate` (default 10 ms) the force is held: a straight line through a force
+//!   that the SMC loop turns around within a few milliseconds does more harm than good
+//!   further out, and on the thesis scene a 100-ms extrapolation gave border bodies
+//!   forces of the wrong sign (both ends of a link gaining energy at once).
+//! - **`passive`**: `predict` over an energy account per border port ([`PortAccount`];
+//!   the booking and the passivity controller are in `node/passivity.rs`).
 //!
-//! A sample older than the node's horizon (twice the longest age the network can
-//! produce) is a lost one: the history has no entry for it, so it is compared with the
-//! oldest entry, and an extrapolation stops growing at the horizon (it is never carried
-//! further forward than a sample could legitimately be old).
+//! A sample whose snapshot is gone (it arrived after a later sample of its route, which
+//! only a jitter larger than the sampling period can do) is compared with the ghost's
+//! current state.
 
 use std::collections::VecDeque;
 
@@ -109,9 +115,9 @@ impl Extrapolated {
         }
     }
 
-    /// `(F + Ḟ·age, T + Ṫ·age)` at `t`, the age capped at `horizon`.
-    pub fn at(&self, t: SimTime, horizon: SimTime) -> (Vector3<f64>, Vector3<f64>) {
-        let age = SimTime(t.0.saturating_sub(self.sent.0).min(horizon.0)).as_secs_f64();
+    /// `(F + Ḟ·age, T + Ṫ·age)` at `t`, the age capped at `cap` (never negative).
+    pub fn at(&self, t: SimTime, cap: SimTime) -> (Vector3<f64>, Vector3<f64>) {
+        let age = SimTime(t.0.saturating_sub(self.sent.0).min(cap.0)).as_secs_f64();
         (
             self.force + self.force_rate * age,
             self.torque + self.torque_rate * age,
@@ -280,7 +286,7 @@ mod tests {
     }
 
     #[test]
-    fn extrapolation_stops_growing_at_the_horizon() {
+    fn extrapolation_stops_growing_at_its_cap() {
         let e = Extrapolated {
             force: Vector3::new(1.0, 0.0, 0.0),
             torque: Vector3::zeros(),
