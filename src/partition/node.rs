@@ -265,21 +265,13 @@ impl Node {
                 torque_rate += h.value.torque_rate;
             }
         }
-        let rigid = self.state.is_rigid();
+        let own = self.body_sample(i);
         Payload::State {
             body: g,
-            p: self.state.p[i],
-            v: self.state.v[i],
-            q: if rigid {
-                self.state.q[i]
-            } else {
-                Quaternion::identity()
-            },
-            omega: if rigid {
-                self.state.omega[i]
-            } else {
-                Vector3::zeros()
-            },
+            p: own.p,
+            v: own.v,
+            q: own.q,
+            omega: own.omega,
             force,
             torque,
             force_rate,
@@ -374,7 +366,7 @@ impl Node {
                     q: *q,
                     omega: *omega,
                 };
-                let current = self.ghost_sample(g);
+                let current = self.body_sample(g);
                 if let Some(history) = self.coupling.history.get_mut(k) {
                     // Predict: shift the ghost (and its past from `sent` on) by the
                     // sample's error against the ghost's own state at `sent`.
@@ -460,12 +452,13 @@ impl Node {
         if local < self.owned || self.coupling.history.is_empty() {
             return;
         }
-        let sample = self.ghost_sample(local);
+        let sample = self.body_sample(local);
         self.coupling.history[local - self.owned].snapshot(t, sample);
     }
 
-    /// The ghost `g`'s (local) current state.
-    fn ghost_sample(&self, g: usize) -> GhostSample {
+    /// Local body `g`'s current state (identity orientation and zero angular velocity
+    /// on point masses).
+    fn body_sample(&self, g: usize) -> GhostSample {
         let rigid = self.state.is_rigid();
         GhostSample {
             p: self.state.p[g],
