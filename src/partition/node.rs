@@ -44,6 +44,8 @@ struct CouplingState {
     port_forces: Vec<Vec<usize>>,
     /// Scratch: each held force's value at the current step (force, torque).
     held_now: Vec<(Vector3<f64>, Vector3<f64>)>,
+    /// Scratch (`passive`): (far end, power) of one ghost's border links.
+    end_powers: Vec<(usize, f64)>,
 }
 
 /// A ghost's last received state (for the `hold` mode).
@@ -178,6 +180,7 @@ impl Node {
             ports_in: Vec::new(),
             port_forces: Vec::new(),
             held_now: Vec::new(),
+            end_powers: Vec::new(),
         };
         let mut coupling = coupling;
         if scheme.tank().is_some() {

@@ -41,30 +41,29 @@ impl Node {
             let allowed = self.coupling.ports_in[p].2.book(power, h, tank);
             self.damp(b, power - allowed, 1.0);
         }
-        // Side 1: this node's border links to each ghost, on their own-body ends.
+        // Side 1: this node's border links to each ghost, on their own-body ends (each
+        // end's power computed once, kept in a reused scratch list).
+        let mut ends = std::mem::take(&mut self.coupling.end_powers);
         for k in 0..self.coupling.ports_out.len() {
             let g = self.owned + k;
-            let mut power = 0.0;
-            let mut positive = 0.0;
-            for &l in &self.incident[g] {
-                let p_l = self.end_power(l, g);
-                power += p_l;
-                positive += p_l.max(0.0);
-            }
+            ends.clear();
+            ends.extend(
+                self.incident[g]
+                    .iter()
+                    .map(|&l| (self.far_end(l, g), self.end_power(l, g))),
+            );
+            let power: f64 = ends.iter().map(|e| e.1).sum();
+            let positive: f64 = ends.iter().map(|e| e.1.max(0.0)).sum();
             let allowed = self.coupling.ports_out[k].book(power, h, tank);
             if power > allowed && positive > 0.0 {
                 // Every giving end gives the same fraction less.
                 let fraction = (power - allowed) / positive;
-                for i in 0..self.incident[g].len() {
-                    let l = self.incident[g][i];
-                    let p_l = self.end_power(l, g);
-                    if p_l > 0.0 {
-                        let a = self.far_end(l, g);
-                        self.damp(a, p_l, fraction);
-                    }
+                for &(a, p_l) in ends.iter().filter(|e| e.1 > 0.0) {
+                    self.damp(a, p_l, fraction);
                 }
             }
         }
+        self.coupling.end_powers = ends;
     }
 
     /// Velocity and angular velocity of local body `b` (zero ω on point masses).
