@@ -81,7 +81,7 @@ fn print_table(since: SystemTime) {
         println!(
             "  {case:<12} {:>14.3} {:>10}",
             ns / 1000.0 / 1000.0,
-            reset.map_or("—".into(), |r| format!("{:.3}×", ns / r)),
+            common::times(ns, reset),
         );
     }
 }
@@ -89,8 +89,5 @@ fn print_table(since: SystemTime) {
 criterion_group!(benches, bench_coupling);
 
 fn main() {
-    let started = SystemTime::now();
-    benches();
-    Criterion::default().configure_from_args().final_summary();
-    print_table(started);
+    common::run_then(benches, print_table);
 }

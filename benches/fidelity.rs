@@ -408,10 +408,7 @@ fn interleaved(rounds: usize) {
 criterion_group!(benches, bench_fidelity);
 
 fn main() {
-    let started = SystemTime::now();
-    benches();
-    Criterion::default().configure_from_args().final_summary();
-    print_ratios(started);
+    common::run_then(benches, print_ratios);
     // `cargo test --benches` and `--list` only check that the bench runs.
     let args: Vec<String> = std::env::args().collect();
     if !args.iter().any(|a| a == "--test" || a == "--list") {

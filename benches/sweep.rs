@@ -139,8 +139,5 @@ fn print_table(since: SystemTime) {
 criterion_group!(benches, bench_sweep);
 
 fn main() {
-    let started = SystemTime::now();
-    benches();
-    Criterion::default().configure_from_args().final_summary();
-    print_table(started);
+    common::run_then(benches, print_table);
 }

@@ -90,7 +90,7 @@ fn print_table(since: SystemTime) {
             events,
             events as f64 / secs,
             1.0 / secs,
-            ideal.map_or("—".into(), |i| format!("{:.3}×", ns / i)),
+            common::times(ns, ideal),
         );
     }
 }
@@ -98,8 +98,5 @@ fn print_table(since: SystemTime) {
 criterion_group!(benches, bench_tdma);
 
 fn main() {
-    let started = SystemTime::now();
-    benches();
-    Criterion::default().configure_from_args().final_summary();
-    print_table(started);
+    common::run_then(benches, print_table);
 }

@@ -54,3 +54,22 @@ pub fn bench_one_second(
     }
     g.finish();
 }
+
+/// A bench binary's `main`: runs the criterion `benches`, prints criterion's summary, then
+/// `report(started)` with the time the run started (so the report reads only this run's
+/// medians, see [`median`]).
+#[allow(dead_code)] // not every bench that shares this module reports after the run
+pub fn run_then(benches: fn(), report: impl FnOnce(SystemTime)) {
+    let started = SystemTime::now();
+    benches();
+    criterion::Criterion::default()
+        .configure_from_args()
+        .final_summary();
+    report(started);
+}
+
+/// `a / b` as `1.234×`, or `—` when `b` was not measured in this run.
+#[allow(dead_code)] // not every bench that shares this module prints ratios
+pub fn times(a: f64, b: Option<f64>) -> String {
+    b.map_or("—".into(), |b| format!("{:.3}×", a / b))
+}
