@@ -117,34 +117,35 @@ pub(super) fn write_plots(out: &Path, name: &str, cells: &[Cell]) -> Result<()> 
         }
         all
     };
-    let err = series(&|c| c.err_mono);
-    let title = format!("{name} — error vs delay per coupling (bounded runs only)");
-    write_line_plot(
-        &out.join("error_vs_tau.svg"),
-        &LinePlot {
-            title: &title,
-            x_label: "delay τ = latency [ms]",
-            y_label: "RMS position error vs monolithic, 0–3 s [m]",
-            series: &err,
-            x_scale: Scale::Log,
-            y_scale: Scale::Log,
-            step: false,
-            markers: true,
-        },
+    // Both plots: delay on a log axis, bounded cells only, one line per scheme.
+    let plot = |file: &str, what: &str, y_label: &str, y_scale: Scale, series: &[Series]| {
+        let title = format!("{name} — {what} vs delay (bounded runs only)");
+        write_line_plot(
+            &out.join(file),
+            &LinePlot {
+                title: &title,
+                x_label: "delay τ = latency [ms]",
+                y_label,
+                series,
+                x_scale: Scale::Log,
+                y_scale,
+                step: false,
+                markers: true,
+            },
+        )
+    };
+    plot(
+        "error_vs_tau.svg",
+        "error per coupling",
+        "RMS position error vs monolithic, 0–3 s [m]",
+        Scale::Log,
+        &series(&|c| c.err_mono),
     )?;
-    let max_w = series(&|c| c.max_w);
-    let title = format!("{name} — largest constraint violation vs delay (bounded runs only)");
-    write_line_plot(
-        &out.join("max_w_vs_tau.svg"),
-        &LinePlot {
-            title: &title,
-            x_label: "delay τ = latency [ms]",
-            y_label: "max |w| over the run [m]",
-            series: &max_w,
-            x_scale: Scale::Log,
-            y_scale: Scale::Linear,
-            step: false,
-            markers: true,
-        },
+    plot(
+        "max_w_vs_tau.svg",
+        "largest constraint violation",
+        "max |w| over the run [m]",
+        Scale::Linear,
+        &series(&|c| c.max_w),
     )
 }

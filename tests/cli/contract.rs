@@ -157,37 +157,55 @@ fn check_trace(dir: &Path, links: usize, out: &mut Vec<String>) {
     if rows.is_empty() {
         out.push("trace.csv: no rows".into());
     }
-    let mut last_t = f64::NEG_INFINITY;
+    let Some(values) = numbers("trace.csv", &head, &rows, &|_| true, out) else {
+        return;
+    };
+    for (r, pair) in values.windows(2).enumerate() {
+        if pair[1][0] <= pair[0][0] {
+            out.push(format!("trace.csv row {}: t does not increase", r + 3));
+            return;
+        }
+    }
+}
+
+/// Parses every row of a CSV file as numbers: each as wide as the header, each cell a
+/// number, finite in the columns `finite` names. The rows, or `None` after reporting the
+/// first breach (rows are numbered as in the file, the header being row 1).
+fn numbers(
+    file: &str,
+    head: &[String],
+    rows: &[String],
+    finite: &dyn Fn(&str) -> bool,
+    out: &mut Vec<String>,
+) -> Option<Vec<Vec<f64>>> {
+    let mut values = Vec::with_capacity(rows.len());
     for (r, row) in rows.iter().enumerate() {
         let cells: Vec<&str> = row.split(',').collect();
         if cells.len() != head.len() {
             out.push(format!(
-                "trace.csv row {}: {} cells for {} columns",
+                "{file} row {}: {} cells for {} columns",
                 r + 2,
                 cells.len(),
                 head.len()
             ));
-            return;
+            return None;
         }
-        for (c, cell) in head.iter().zip(&cells) {
+        let mut parsed = Vec::with_capacity(cells.len());
+        for (col, cell) in head.iter().zip(&cells) {
             match cell.parse::<f64>() {
-                Ok(x) if x.is_finite() => {}
+                Ok(x) if x.is_finite() || !finite(col) => parsed.push(x),
                 _ => {
                     out.push(format!(
-                        "trace.csv row {}, column {c}: not a finite number: {cell:?}",
+                        "{file} row {}, column {col}: not a finite number: {cell:?}",
                         r + 2
                     ));
-                    return;
+                    return None;
                 }
             }
         }
-        let t: f64 = cells[0].parse().unwrap_or(f64::NAN);
-        if t <= last_t {
-            out.push(format!("trace.csv row {}: t does not increase", r + 2));
-            return;
-        }
-        last_t = t;
+        values.push(parsed);
     }
+    Some(values)
 }
 
 /// Checks epochs.csv; returns the methods that have an objective column.
@@ -215,38 +233,14 @@ fn check_epochs(dir: &Path, summary: &Value, out: &mut Vec<String>) -> Vec<Strin
     if rows.is_empty() {
         out.push("epochs.csv: no rows".into());
     }
-    for (r, row) in rows.iter().enumerate() {
-        let cells: Vec<&str> = row.split(',').collect();
-        if cells.len() != head.len() {
-            out.push(format!(
-                "epochs.csv row {}: {} cells for {} columns",
-                r + 2,
-                cells.len(),
-                head.len()
-            ));
-            return methods;
-        }
-        for (col, cell) in head.iter().zip(&cells) {
-            let x: f64 = match cell.parse() {
-                Ok(x) => x,
-                Err(_) => {
-                    out.push(format!(
-                        "epochs.csv row {}, column {col}: not a number: {cell:?}",
-                        r + 2
-                    ));
-                    return methods;
-                }
-            };
-            // A method that measured nothing in a window reports NaN for its objective.
-            if !x.is_finite() && expected.contains(col) {
-                out.push(format!(
-                    "epochs.csv row {}, column {col}: not finite: {cell:?}",
-                    r + 2
-                ));
-                return methods;
-            }
-        }
-    }
+    // A method that measured nothing in a window reports NaN for its objective.
+    numbers(
+        "epochs.csv",
+        &head,
+        &rows,
+        &|col| expected.iter().any(|e| e == col),
+        out,
+    );
     methods
 }
 
