@@ -17,7 +17,7 @@ use std::time::SystemTime;
 use criterion::{criterion_group, Criterion};
 use dsmcosim::cosim::CoSim;
 use dsmcosim::scenario::parse_str;
-use serde_json::{json, Value};
+use serde_json::json;
 
 const GROUP: &str = "coupling_1s";
 const CASES: [&str; 5] = ["reset", "predict", "passive", "big_reset", "big_passive"];
@@ -27,13 +27,7 @@ fn world(case: &str) -> CoSim {
         return big(scheme);
     }
     let scheme = case;
-    let p = format!(
-        "{}/scenarios/grid16_space_fixed.json",
-        env!("CARGO_MANIFEST_DIR")
-    );
-    let mut v: Value =
-        serde_json::from_str(&std::fs::read_to_string(p).expect("scenario")).expect("json");
-    v["duration"] = json!(1.0);
+    let mut v = common::shipped_one_second("grid16_space_fixed");
     v["partition"]["coupling"] = json!(scheme);
     CoSim::new(&parse_str(&v.to_string(), scheme).expect("valid scenario"))
 }

@@ -29,14 +29,7 @@ const ONE_SECOND: SimTime = SimTime(1_000_000_000);
 const CASES: [&str; 3] = ["ideal", "tdma_plain", "tdma_full"];
 
 fn shipped() -> Value {
-    let p = format!(
-        "{}/scenarios/tdma16_space_fixed.json",
-        env!("CARGO_MANIFEST_DIR")
-    );
-    let mut v: Value =
-        serde_json::from_str(&std::fs::read_to_string(p).expect("scenario")).expect("json");
-    v["duration"] = json!(1.0);
-    v
+    common::shipped_one_second("tdma16_space_fixed")
 }
 
 fn world(case: &str) -> CoSim {

@@ -73,3 +73,13 @@ pub fn run_then(benches: fn(), report: impl FnOnce(SystemTime)) {
 pub fn times(a: f64, b: Option<f64>) -> String {
     b.map_or("—".into(), |b| format!("{:.3}×", a / b))
 }
+
+/// A shipped scenario (`scenarios/NAME.json`) cut to 1 s, as JSON for a bench to edit.
+#[allow(dead_code)] // not every bench that shares this module reads shipped scenarios
+pub fn shipped_one_second(name: &str) -> Value {
+    let p = format!("{}/scenarios/{name}.json", env!("CARGO_MANIFEST_DIR"));
+    let mut v: Value =
+        serde_json::from_str(&std::fs::read_to_string(p).expect("scenario")).expect("json");
+    v["duration"] = serde_json::json!(1.0);
+    v
+}
