@@ -19,14 +19,16 @@ pub enum Event {
     /// A TDMA cycle starts: the protocol computes it (class `ClockSync`).
     Cycle,
     /// A TDMA data frame starts: `sender` (TDMA node) samples its data of `channel`,
-    /// delivered at `delivery` (class `Slot`).
+    /// delivered at `delivery`, or lost (`None`; such frames are scheduled only under
+    /// `network.sample: "previous_slot"`, where the sender still takes its sample)
+    /// (class `Slot`).
     Frame {
         /// Channel index.
         channel: usize,
         /// Sending TDMA node (partition node + 1).
         sender: usize,
-        /// When every receiver has it.
-        delivery: crate::kernel::SimTime,
+        /// When every receiver has it (`None`: the frame collided).
+        delivery: Option<crate::kernel::SimTime>,
     },
     /// A controller's decision reaches the TDMA server after its computing lag
     /// (class `Controller`): the list scheduled for these periods [s] is broadcast.

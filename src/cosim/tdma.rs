@@ -18,7 +18,8 @@ use crate::network::tdma::schedule::achieved_periods;
 use crate::network::tdma::{
     schedule, ChannelRequest, CycleReport, Schedule, SlotList, TdmaError, TdmaNetwork,
 };
-use crate::network::Channel;
+use crate::network::{Channel, Message};
+use crate::scenario::file::TdmaSample;
 use crate::scenario::model::{NetworkSpec, Scenario};
 
 /// A co-simulation's TDMA network and what it has delivered.
@@ -33,6 +34,9 @@ pub struct TdmaLink {
     worst: Vec<SimTime>,
     decision_lag: SimTime,
     switches: Vec<Switch>,
+    /// `network.sample: "previous_slot"`: per channel, per sender (in `senders` order),
+    /// the messages sampled at the pair's last frame, carried by its next one.
+    pending: Option<Vec<Vec<Vec<Message>>>>,
 }
 
 impl TdmaLink {
@@ -66,10 +70,12 @@ impl TdmaLink {
                 .map(|s| vec![SimTime::ZERO; s.len()])
                 .collect(),
             worst: vec![SimTime::ZERO; channels.len()],
-            senders,
             net,
             decision_lag: spec.decision_lag,
             switches: Vec::new(),
+            pending: (spec.sample == TdmaSample::PreviousSlot)
+                .then(|| senders.iter().map(|s| vec![Vec::new(); s.len()]).collect()),
+            senders,
         })
     }
 
@@ -145,6 +151,26 @@ impl TdmaLink {
             .collect();
         self.worst.iter_mut().for_each(|w| *w = SimTime::ZERO);
         measured
+    }
+
+    /// Whether frames carry the sample of the pair's previous frame
+    /// (`network.sample: "previous_slot"`).
+    pub fn pipelined(&self) -> bool {
+        self.pending.is_some()
+    }
+
+    /// What a frame of `sender` on `channel` carries, given the messages `fresh` it
+    /// sampled at its start: those (`"slot"`), or the ones sampled at the pair's
+    /// previous frame, `fresh` being kept for its next (`"previous_slot"`; the first
+    /// frame of a pair carries nothing, its ghosts start from the true initial state).
+    pub fn carry(&mut self, channel: usize, sender: usize, fresh: Vec<Message>) -> Vec<Message> {
+        let Some(pending) = &mut self.pending else {
+            return fresh;
+        };
+        match self.senders[channel].iter().position(|&s| s == sender) {
+            Some(i) => std::mem::replace(&mut pending[channel][i], fresh),
+            None => Vec::new(),
+        }
     }
 
     /// Whether `sender` (TDMA node) sends on `channel`.

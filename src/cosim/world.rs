@@ -445,13 +445,12 @@ impl CoSim {
         obs.on_cycle(&report)
             .map_err(|e| Error::io("network.csv", e))?;
         let end = self.scenario.duration;
+        let lost_frames_sample = link.pipelined();
         for f in &report.frames {
-            let (crate::network::tdma::collision::FrameKind::Dynamic { channel }, Some(delivery)) =
-                (f.kind, f.delivery)
-            else {
+            let crate::network::tdma::collision::FrameKind::Dynamic { channel } = f.kind else {
                 continue;
             };
-            if f.start >= end {
+            if f.start >= end || (f.delivery.is_none() && !lost_frames_sample) {
                 continue;
             }
             // A frame is never computed before its cycle starts; only a clock far
@@ -464,7 +463,7 @@ impl CoSim {
                 Event::Frame {
                     channel,
                     sender,
-                    delivery: delivery.max(at),
+                    delivery: f.delivery.map(|d| d.max(at)),
                 },
             );
         }
@@ -480,26 +479,42 @@ impl CoSim {
         Ok(())
     }
 
-    /// A TDMA data frame of `sender` on channel `c` starts at `t`: the sender's messages
-    /// of the channel carry what it has at `t` — its state at the next step boundary
-    /// `⌈t/dt⌉·dt` (the lock-step has already computed it), exactly what an ideal
-    /// channel sampling at that boundary would carry — and arrive at `delivery`.
-    fn frame(&mut self, t: SimTime, c: usize, sender: usize, delivery: SimTime) {
+    /// A TDMA data frame of `sender` on channel `c` starts at `t`: the sender samples
+    /// what it has at `t` — its state at the next step boundary `⌈t/dt⌉·dt` (the
+    /// lock-step has already computed it), exactly what an ideal channel sampling at
+    /// that boundary would carry. The frame carries that sample (`network.sample:
+    /// "slot"`) or the one taken at the pair's previous frame (`"previous_slot"`), and
+    /// arrives at `delivery` (`None`: it collided, and what it carried is lost).
+    fn frame(&mut self, t: SimTime, c: usize, sender: usize, delivery: Option<SimTime>) {
         let dt = self.scenario.dt.0;
         let sampled = SimTime(t.0.div_ceil(dt) * dt);
-        if let Some(link) = &mut self.tdma {
-            link.delivered(c, sender, delivery);
-        }
+        let mut fresh = Vec::new();
         for r in 0..self.channels[c].routes.len() {
             let route = self.channels[c].routes[r];
             if tdma_node(route.from) != sender {
                 continue;
             }
             if let Some(msg) = self.message(sampled, c, r) {
-                if delivery <= self.scenario.duration {
-                    self.send(delivery, msg);
-                }
+                self.snapshot(&msg);
+                fresh.push(msg);
             }
+        }
+        let link = self
+            .tdma
+            .as_mut()
+            .expect("ok: only tdma scenes have frames");
+        let carried = link.carry(c, sender, fresh);
+        let Some(delivery) = delivery else { return };
+        link.delivered(c, sender, delivery);
+        if delivery > self.scenario.duration {
+            return;
+        }
+        for msg in carried {
+            self.schedule(
+                delivery,
+                EventClass::Delivery,
+                Event::Deliver(Box::new(msg)),
+            );
         }
     }
 
@@ -525,10 +540,16 @@ impl CoSim {
     /// keep its ghost's state of the sample time, for the coupling to compare the sample
     /// with when it arrives.
     fn send(&mut self, at: SimTime, msg: Message) {
+        self.snapshot(&msg);
+        self.schedule(at, EventClass::Delivery, Event::Deliver(Box::new(msg)));
+    }
+
+    /// A state message is sampled now: its receiver keeps its ghost's state of the
+    /// sample time.
+    fn snapshot(&mut self, msg: &Message) {
         if let crate::network::Payload::State { body, .. } = msg.payload {
             self.nodes[msg.to].snapshot_ghost(body, msg.sent);
         }
-        self.schedule(at, EventClass::Delivery, Event::Deliver(Box::new(msg)));
     }
 
     fn schedule(&mut self, t: SimTime, class: EventClass, event: Event) {

@@ -54,12 +54,24 @@ fn identity_quaternion() -> [f64; 4] {
     [1.0, 0.0, 0.0, 0.0]
 }
 
+/// Longest `description` a scenario may carry [characters].
+pub const MAX_DESCRIPTION_CHARS: usize = 4096;
+
 /// A whole scenario file (method §7 plus our own optional sections).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ScenarioFile {
     /// Scenario name, copied into summary.json; required, non-empty.
     pub name: String,
+    /// What the scenario is for, in words (what its τ and latency mean, where it comes
+    /// from); optional, at most [`MAX_DESCRIPTION_CHARS`] characters, read by people
+    /// only: nothing of it reaches a run.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub description: Option<String>,
     /// Seed of every random stream of the run; required (no hidden default seed).
     pub seed: u64,
     /// Simulated duration [s]; required, a whole number of `dt` steps.
@@ -703,6 +715,29 @@ pub struct NetworkFile {
         skip_serializing_if = "Option::is_none"
     )]
     pub decision_lag: Option<f64>,
+    /// TDMA: which sample a data frame carries: `"slot"` (default: the sender's state at
+    /// the frame's start, so the data's age on arrival is the transmission latency) or
+    /// `"previous_slot"` (the sample the sender took at its previous frame of the same
+    /// channel: the data is one period old, the thesis's `x(t − τ)` reading on a slot
+    /// list).
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub sample: Option<TdmaSample>,
+}
+
+/// `network.sample` (TDMA): which sample a data frame carries.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TdmaSample {
+    /// The sender's state at the frame's start (data as old as the transmission).
+    #[default]
+    Slot,
+    /// The sample taken at the sender's previous frame of the channel (data one period
+    /// old on arrival, plus the transmission).
+    PreviousSlot,
 }
 
 /// `network.jitter`: `{"kind": "uniform", "max": s}` or `{"kind": "exponential", "mean": s}`.

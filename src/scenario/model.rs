@@ -390,6 +390,8 @@ pub struct TdmaSpec {
     pub slot_list: Option<crate::network::tdma::SlotList>,
     /// Time from a controller decision to the server's list broadcast (`T_s · m_r`).
     pub decision_lag: SimTime,
+    /// Which sample a data frame carries (`network.sample`).
+    pub sample: crate::scenario::file::TdmaSample,
 }
 
 /// The delay-optimization problem (method §5).

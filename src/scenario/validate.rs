@@ -170,6 +170,18 @@ pub fn validate(file: ScenarioFile) -> Result<Scenario> {
     if file.name.trim().is_empty() {
         return Err(Error::invalid("name", "must not be empty"));
     }
+    if let Some(d) = &file.description {
+        let chars = d.chars().count();
+        if chars > crate::scenario::file::MAX_DESCRIPTION_CHARS {
+            return Err(Error::invalid(
+                "description",
+                format!(
+                    "has {chars} characters; at most {} are allowed",
+                    crate::scenario::file::MAX_DESCRIPTION_CHARS
+                ),
+            ));
+        }
+    }
     let (dt, duration) = step_and_duration(file.dt, file.duration)?;
     let integrator = match file.integrator {
         IntegratorFile::Euler => Integrator::Euler,

@@ -342,6 +342,10 @@ fn wrong_types_are_rejected() {
     invalid(set("/seed", json!(-1)), "seed", "expected u64");
     invalid(set("/seed", json!(1.5)), "seed", "expected u64");
     invalid(set("/name", json!(7)), "name", "invalid type");
+    invalid(set("/description", json!(["a"])), "description", "invalid type");
+    invalid(set("/description", json!("x".repeat(4097))), "description", "4097 characters; at most 4096");
+    invalid(set_part("/network/sample", json!("now")), "network.sample", "unknown variant");
+    invalid(set_part("/network/sample", json!("previous_slot")), "network.sample", "not a key of kind \"ideal\"");
     invalid(set("/dt", json!("1ms")), "dt", "invalid type");
     invalid(set("/model/bodies/0/position", json!([0, 0])), "model.bodies[0].position", "length 2");
     invalid(set("/model/bodies/0/position", json!([0, 0, "z"])), "model.bodies[0].position[2]", "string");
@@ -931,6 +935,7 @@ fn scenario() -> impl Strategy<Value = ScenarioFile> {
             let (partition, channels) = partition_sections(partition_draw, &bodies, &links, dt_ns);
             ScenarioFile {
                 name: format!("random {seed}"),
+                description: None,
                 seed,
                 duration: secs(dt_ns * steps),
                 dt: secs(dt_ns),

@@ -133,6 +133,59 @@ fn a_list_realizing_the_periods_reproduces_the_ideal_run_bit_for_bit() {
 }
 
 #[test]
+fn previous_slot_frames_reproduce_ideal_channels_at_latency_tau_bit_for_bit() {
+    // `network.sample: "previous_slot"`: each frame carries the sample its pair took at
+    // its previous frame, one cycle (τ = 10 ms) earlier: the thesis's x(t − τ) reading,
+    // which ideal channels give with latency = τ (the default) and the same phases.
+    let mut ideal = row_ideal(3.0, 0.01, 0.004, 0.005);
+    for c in 0..2 {
+        ideal["channels"][c]["latency"] = json!(0.01);
+    }
+    let (ideal_world, ideal) = watch(&ideal);
+    let mut v = row_tdma(3.0, 0.01);
+    v["network"]["sample"] = json!("previous_slot");
+    let (tdma_world, tdma) = watch(&v);
+    assert_eq!(ideal.deliveries, tdma.deliveries);
+    assert_eq!(ideal.steps.hex(), tdma.steps.hex());
+    assert_eq!(ideal_world.messages(), tdma_world.messages());
+    for (t, _, _, _, sent) in &tdma.deliveries {
+        assert_eq!(t.as_nanos() - sent.as_nanos(), 10_000_000, "one period old");
+    }
+    // The default (`"slot"`) is another reading and another run.
+    let (_, now) = watch(&row_tdma(3.0, 0.01));
+    assert_ne!(now.steps.hex(), tdma.steps.hex());
+}
+
+#[test]
+fn a_lost_previous_slot_frame_loses_the_older_sample_and_the_next_carries_a_fresh_one() {
+    // Drift far beyond the guard: frames collide. Under "previous_slot" a sender still
+    // samples at every frame, lost or not, so no delivered sample is older than the
+    // worst gap between two of the pair's frames, and no sample is delivered twice.
+    let lossy = json!({"drift_ppm": 80000.0, "link_rate": 20e6, "sample": "previous_slot"});
+    let (world, w) = watch(&thesis_tdma(2.0, lossy));
+    let net = world.tdma().expect("a tdma world").network();
+    assert!(net.lost() > 0, "the drift must lose frames for this test");
+    assert!(
+        !w.deliveries.is_empty(),
+        "frames that did not collide deliver"
+    );
+    // (from, to, channel) → (delivery, sample time) of its last frame.
+    let mut last = std::collections::BTreeMap::new();
+    for &(t, from, to, channel, sent) in &w.deliveries {
+        assert!(t > sent, "a previous-slot sample is older than its frame");
+        assert!(
+            t.as_nanos() - sent.as_nanos() < 6_000_000,
+            "age {} ns at {t:?} is more than one 5 ms cycle plus the frame",
+            t.as_nanos() - sent.as_nanos()
+        );
+        // A frame carries several messages of one sample; a later frame a newer one.
+        if let Some((t0, sent0)) = last.insert((from, to, channel), (t, sent)) {
+            assert!(t == t0 || sent > sent0, "a sample delivered in two frames");
+        }
+    }
+}
+
+#[test]
 fn off_grid_frames_carry_the_state_of_the_next_step_boundary() {
     // A 100 µs slot puts the data frames between step boundaries (0.4 and 0.5 ms into
     // each cycle): the sender has already computed the state at the next boundary

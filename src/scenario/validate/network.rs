@@ -42,6 +42,7 @@ fn ideal_has_no_tdma_keys(n: &NetworkFile) -> Result<()> {
         ("jitter", n.jitter.is_some()),
         ("slot_list", n.slot_list.is_some()),
         ("decision_lag", n.decision_lag.is_some()),
+        ("sample", n.sample.is_some()),
     ];
     match present.iter().find(|(_, p)| *p) {
         Some((key, _)) => Err(foreign(&format!("network.{key}"), "ideal")),
@@ -109,6 +110,7 @@ fn tdma(
         config: cfg,
         slot_list,
         decision_lag,
+        sample: n.sample.unwrap_or_default(),
     })
 }
 
