@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Position and velocity errors of bodies 1 and 16 in the controlled space-CP runs,
+"""Position and velocity errors of bodies 1 and 16 in the controlled space-CP runs (both
+readings of delay: <run> latency = tau, <run>_hold sample-and-hold),
 relative to the monolithic reference (grid16_monolithic: same scene, no partition, no
 delay), over growing horizons [0, H]. Reads results/<run>/trace.csv (every 100th step,
 i.e. every 0.1 s). Usage: results/compare_errors.py [RESULTS_DIR]
@@ -10,9 +11,11 @@ import csv, math, os, sys
 
 root = sys.argv[1] if len(sys.argv) > 1 else os.path.dirname(os.path.abspath(__file__))
 REF = "grid16_monolithic"
-RUNS = [("grid16_space_cp_no_opt", "no optimization (5/5 ms)"),
-        ("grid16_space_cp", "DSM, D_s 12 ms"),
-        ("grid16_space_cp_ds2", "DSM, D_s 2 ms")]
+RUNS = [(n + suffix, f"{label}, {reading}")
+        for suffix, reading in (("", "thesis reading"), ("_hold", "sample-and-hold"))
+        for n, label in (("grid16_space_cp_no_opt", "no optimization (5/5 ms)"),
+                         ("grid16_space_cp", "DSM, D_s 12 ms"),
+                         ("grid16_space_cp_ds2", "DSM, D_s 2 ms"))]
 HORIZONS = [1, 2, 3, 5, 10, 20, 30]
 
 

@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Prints the figures results/README.md quotes for the thesis experiments, from the
-stored runs in results/<scenario>/ (summary.json and epochs.csv).
+stored runs in results/<scenario>/ (summary.json and epochs.csv), in both readings of
+delay: the thesis reading (<scenario>, latency = tau) and sample-and-hold (<scenario>_hold).
 Usage: results/summarize_experiments.py [RESULTS_DIR]"""
 import csv, glob, json, os, sys
 
@@ -8,6 +9,7 @@ root = sys.argv[1] if len(sys.argv) > 1 else os.path.dirname(os.path.abspath(__f
 names = ["grid16_space_cp", "grid16_space_cp_ds2", "grid16_space_cp_T10", "grid16_space_cp_ramp",
          "grid16_space_cp_ramp_ds2", "grid16_space_up", "grid16_time_cp", "grid16_time_cp_ds2",
          "grid16_time_up", "tdma4_space_cp", "tdma16_space_cp"]
+names = [v for n in names for v in (n, n + "_hold")]
 
 def mean(xs):
     xs = [x for x in xs if x == x]

@@ -185,9 +185,10 @@ fn time_cp_grid_optimum_never_slows_forces_below_states_and_sometimes_speeds_the
     // while body 1 is driven our grid optimum never makes states faster than forces,
     // but it often picks equal delays (τ_state = 5 ms): a grid that always picked equal
     // delays would pass the first check, so also count the windows where forces are
-    // strictly faster and require at least one. That is all the model shows: "forces
-    // never slower", not "forces faster" in most windows (results/README.md).
-    let (_, exp) = run(&shipped("grid16_time_cp", 12.0, json!(["grid"])));
+    // strictly faster and require at least one. That is all the model shows in the
+    // sample-and-hold reading: "forces never slower", not "forces faster" in most
+    // windows (results/README.md; the thesis reading's test follows).
+    let (_, exp) = run(&shipped("grid16_time_cp_hold", 12.0, json!(["grid"])));
     let mut forces_faster = 0;
     for w in &exp.windows {
         let tau_state = w.grid_best.as_ref().expect("grid").x[0];
@@ -209,22 +210,52 @@ fn time_cp_grid_optimum_never_slows_forces_below_states_and_sometimes_speeds_the
 }
 
 #[test]
-fn time_up_grid_optimum_gives_forces_the_smaller_delay_in_most_windows() {
-    // Thesis: in time UP the force delay stays below the state delay. Our grid optimum
-    // does so in a majority of windows, not in all of them (results/README.md); assert
-    // the majority, over windows where the two delays differ and over all windows.
-    let (_, exp) = run(&shipped("grid16_time_up", 10.0, json!(["grid"])));
+fn time_cp_in_the_thesis_reading_gives_forces_the_smaller_delay_in_most_windows() {
+    // Thesis reading (latency = τ, default coupling): the grid optimum over the 12 s
+    // while body 1 is driven makes forces strictly faster than states (τ_state > 5 ms
+    // at the 400 Hz budget) in a majority of windows and states faster in none.
+    let (_, exp) = run(&shipped("grid16_time_cp", 12.0, json!(["grid"])));
     let (mut forces, mut states) = (0, 0);
     for w in &exp.windows {
-        let x = &w.grid_best.as_ref().expect("grid").x;
-        let (tau_state, tau_force) = (x[0], x[1]);
-        forces += usize::from(tau_force < tau_state);
-        states += usize::from(tau_state < tau_force);
+        let tau_state = w.grid_best.as_ref().expect("grid").x[0];
+        forces += usize::from(tau_state > 0.005 + 1e-12);
+        states += usize::from(tau_state < 0.005 - 1e-12);
     }
     let n = exp.windows.len();
-    eprintln!("time UP, 10 s: forces faster in {forces}, states faster in {states} of {n}");
-    assert!(forces > states, "forces {forces} vs states {states}");
+    eprintln!("time CP thesis reading, 12 s: forces faster in {forces}, states in {states} of {n}");
+    assert_eq!(states, 0, "states faster in {states} windows");
     assert!(2 * forces > n, "forces faster in {forces} of {n} windows");
+}
+
+#[test]
+fn time_up_grid_optimum_gives_forces_the_smaller_delay_in_most_windows() {
+    // Thesis: in time UP the force delay stays below the state delay. Our grid optimum
+    // does so in a majority of windows, not in all of them (results/README.md), in
+    // both readings of delay; assert the majority, over windows where the two delays
+    // differ and over all windows: over 10 s in sample-and-hold, over the whole 30 s
+    // in the thesis reading (whose first 10 s split 5 to 4).
+    for (name, duration) in [("grid16_time_up", 30.0), ("grid16_time_up_hold", 10.0)] {
+        let (_, exp) = run(&shipped(name, duration, json!(["grid"])));
+        let (mut forces, mut states) = (0, 0);
+        for w in &exp.windows {
+            let x = &w.grid_best.as_ref().expect("grid").x;
+            let (tau_state, tau_force) = (x[0], x[1]);
+            forces += usize::from(tau_force < tau_state);
+            states += usize::from(tau_state < tau_force);
+        }
+        let n = exp.windows.len();
+        eprintln!(
+            "{name}, {duration} s: forces faster in {forces}, states faster in {states} of {n}"
+        );
+        assert!(
+            forces > states,
+            "{name}: forces {forces} vs states {states}"
+        );
+        assert!(
+            2 * forces > n,
+            "{name}: forces faster in {forces} of {n} windows"
+        );
+    }
 }
 
 #[test]
@@ -245,10 +276,18 @@ fn dsm_with_a_small_simplex_stays_within_fifteen_percent_of_the_grid_optimum() {
         );
         dsm / grid
     };
-    let (small, thesis) = (ratio("grid16_space_cp_ds2"), ratio("grid16_space_cp"));
-    eprintln!("space CP, 8 s: DSM/grid {small:.3} at D_s = 2 ms, {thesis:.3} at 12 ms");
-    assert!(small < 1.15, "DSM/grid {small} at D_s = 2 ms");
-    assert!(small < thesis, "D_s 2 ms ({small}) vs 12 ms ({thesis})");
+    for reading in ["", "_hold"] {
+        let small = ratio(&format!("grid16_space_cp_ds2{reading}"));
+        let thesis = ratio(&format!("grid16_space_cp{reading}"));
+        eprintln!(
+            "space CP{reading}, 8 s: DSM/grid {small:.3} at D_s = 2 ms, {thesis:.3} at 12 ms"
+        );
+        assert!(small < 1.15, "DSM/grid {small} at D_s = 2 ms{reading}");
+        assert!(
+            small < thesis,
+            "D_s 2 ms ({small}) vs 12 ms ({thesis}){reading}"
+        );
+    }
 }
 
 #[test]
@@ -303,8 +342,10 @@ fn online_measurement_runs_one_dsm_candidate_per_window_on_the_live_plant() {
 }
 
 #[test]
-fn dsm_beats_no_optimization_on_the_unconstrained_problems() {
-    for name in ["grid16_space_up", "grid16_time_up"] {
+fn dsm_beats_no_optimization_on_the_unconstrained_problems_in_the_sample_and_hold_reading() {
+    // In the thesis reading it does not (DSM/no-opt 1.008 and 1.006 over 30 s,
+    // results/README.md).
+    for name in ["grid16_space_up_hold", "grid16_time_up_hold"] {
         let (_, exp) = run(&shipped(name, 8.0, json!(["no_opt"])));
         let dsm = exp.mean("dsm", "dsm").expect("dsm");
         let no_opt = exp.mean("no_opt", "dsm").expect("no_opt");
@@ -316,14 +357,31 @@ fn dsm_beats_no_optimization_on_the_unconstrained_problems() {
 }
 
 #[test]
+fn in_the_thesis_reading_a_small_simplex_beats_no_optimization_on_space_cp() {
+    // Thesis reading (latency = τ): the delay costs accuracy, the landscape has a
+    // valley off equal delays, and the DSM with D_s = 2 ms pays over no optimization
+    // (results/README.md; over the whole 30 s, DSM/no-opt 0.974).
+    let (_, exp) = run(&shipped("grid16_space_cp_ds2", 12.0, json!(["no_opt"])));
+    let dsm = exp.mean("dsm", "dsm").expect("dsm");
+    let no_opt = exp.mean("no_opt", "dsm").expect("no_opt");
+    eprintln!("space CP D_s 2 ms thesis reading, 12 s: DSM {dsm:.4}, no-opt {no_opt:.4} m");
+    assert!(dsm < no_opt, "DSM {dsm} vs no-optimization {no_opt}");
+}
+
+#[test]
 fn a_ten_second_period_tracks_the_grid_optimum_worse_than_one_second() {
     // Thesis: with T = 10 s the DSM fails to follow. Measured as the DSM's mean cost
-    // over the grid optimum's on the same windows (20 s, thesis D_s).
+    // over the grid optimum's on the same windows (20 s, thesis D_s), in the
+    // sample-and-hold reading (in the thesis reading the 30-s ratios are 1.470 at
+    // T = 1 s and 1.370 at T = 10 s: D_s = 12 ms tracks badly at either period).
     let ratio = |name: &str| {
         let (_, exp) = run(&shipped(name, 20.0, json!(["grid"])));
         exp.mean("dsm", "dsm").expect("dsm") / exp.mean("grid", "dsm").expect("grid")
     };
-    let (t1, t10) = (ratio("grid16_space_cp"), ratio("grid16_space_cp_T10"));
+    let (t1, t10) = (
+        ratio("grid16_space_cp_hold"),
+        ratio("grid16_space_cp_T10_hold"),
+    );
     eprintln!("DSM/grid cost ratio over 20 s: T = 1 s {t1:.3}, T = 10 s {t10:.3}");
     assert!(
         t10 > t1,
@@ -336,12 +394,17 @@ fn through_tdma_slot_lists_dsm_follows_the_grid_optimum() {
     // Thesis chapter 4: the same behaviour when the delays come from slot lists. Every
     // decision (live and on every fork) goes through the scheduler and the list
     // confirmation; the live run's switches are in the world's TDMA state.
-    // Measured in the `reset` coupling (TDMA delivers within the slot, so the data's
-    // age stays below τ: the sample-and-hold reading). Under the default `passive`
-    // coupling the 8-s landscape is flat (DSM 0.0571, grid 0.0564, no-optimization
-    // 0.0565 m): the thesis claims in that reading are the next study's subject.
-    let mut s = shipped("tdma4_space_cp", 8.0, json!(["grid", "no_opt"]));
-    if let Some(p) = s.partition.as_mut() {
+    // Both readings: frames that carry their pair's previous sample (the thesis's
+    // x(t − τ), the shipped scene) under the default coupling, and frames that carry
+    // the state at their start (sample and hold) under `reset`.
+    for (name, reset) in [("tdma4_space_cp", false), ("tdma4_space_cp_hold", true)] {
+        tdma_dsm_follows_the_grid_optimum(name, reset);
+    }
+}
+
+fn tdma_dsm_follows_the_grid_optimum(name: &str, reset: bool) {
+    let mut s = shipped(name, 8.0, json!(["grid", "no_opt"]));
+    if let (true, Some(p)) = (reset, s.partition.as_mut()) {
         p.coupling = dsmcosim::scenario::model::Coupling::Reset;
     }
     let mut world = dsmcosim::cosim::CoSim::new(&s);
@@ -354,7 +417,7 @@ fn through_tdma_slot_lists_dsm_follows_the_grid_optimum() {
     let dsm = exp.mean("dsm", "dsm").expect("dsm");
     let grid = exp.mean("grid", "dsm").expect("grid");
     let no_opt = exp.mean("no_opt", "dsm").expect("no_opt");
-    eprintln!("TDMA 4 nodes, 8 s: DSM {dsm:.4}, grid {grid:.4}, no-opt {no_opt:.4} m");
+    eprintln!("{name}, 8 s: DSM {dsm:.4}, grid {grid:.4}, no-opt {no_opt:.4} m");
     assert!(
         dsm >= grid - 1e-12,
         "the grid optimum bounds the grid points"
