@@ -21,6 +21,7 @@ use crate::scenario::model::{Scenario, Solver, Stabilizer};
 use crate::trace::{NetworkLog, Recorder};
 
 mod controlled;
+mod landscape;
 mod network;
 
 /// What a finished (or diverged) run measured.
@@ -141,6 +142,7 @@ fn finish(
     network::write_plots(out, &world, &recorder)?;
     if world.scenario().controller.is_some() {
         controlled::write_plots(out, &world, &experiment)?;
+        landscape::write(out, &world, &experiment)?;
     }
     result.map(|()| outcome)
 }
@@ -329,6 +331,7 @@ fn write_summary(
     }
     network::summarize(world, &mut summary);
     controlled::summarize(world, exp, &mut summary);
+    landscape::summarize(world, exp, &mut summary);
     let mut text = serde_json::to_string_pretty(&summary).unwrap_or_default();
     text.push('\n');
     write_atomic(&out.join("summary.json"), text.as_bytes())

@@ -415,6 +415,57 @@ fn seeds_are_derived_per_point_and_reproducible() {
 }
 
 #[test]
+fn a_controlled_sweep_plots_the_dsm_over_its_baselines_and_an_uncontrolled_one_does_not() {
+    let dir = scratch("ratios");
+    let sweep = json!({
+        "name": "ds", "base": "base.json",
+        "overrides": {
+            "/controller": {"method": "dsm", "problem": "cp", "budget": 400.0,
+                            "tau_min": 0.001, "tau_max": 0.02, "initial": [0.005],
+                            "dsm": {"size": 0.002, "reflections": 2},
+                            "baselines": ["grid", "no_opt"], "grid_step": 0.001}
+        },
+        "axes": [{"name": "D_s", "pointer": "/controller/dsm/size", "values": [0.002, 0.004]}]
+    });
+    let path = write_sweep(&dir, "ds.json", &sweep);
+    let out = dir.join("out");
+    ok(&[&"sweep", &path, &"--out", &out]);
+    let csv = read(&out.join("sweep.csv"));
+    let ratio = |a: &str, b: &str| -> Vec<f64> {
+        let (a, b) = (column(&csv, a), column(&csv, b));
+        a.iter()
+            .zip(&b)
+            .map(|(x, y)| x.parse::<f64>().unwrap() / y.parse::<f64>().unwrap())
+            .collect()
+    };
+    for (file, baseline) in [
+        ("dsm_over_grid", "mean_cost_grid"),
+        ("dsm_over_no_opt", "mean_cost_no_opt"),
+    ] {
+        let svg = read(&out.join(format!("{file}_vs_D_s.svg")));
+        assert!(svg.contains("D_s [s]"), "{file}: x label");
+        assert!(svg.contains(" [1]"), "{file}: a ratio's unit");
+        for r in ratio("mean_cost_dsm", baseline) {
+            assert!(r.is_finite() && r > 0.0, "{file}: ratio {r}");
+        }
+    }
+    // Every DSM vertex (5 ms ± whole D_s) is a 1 ms grid point, so the grid optimum
+    // bounds the DSM from below in every window: the ratio is ≥ 1.
+    assert!(ratio("mean_cost_dsm", "mean_cost_grid")
+        .iter()
+        .all(|&r| r >= 1.0 - 1e-12));
+    let plain = dir.join("plain");
+    ok(&[
+        &"sweep",
+        &write_sweep(&dir, "taus.json", &two_taus()),
+        &"--out",
+        &plain,
+    ]);
+    assert!(!plain.join("dsm_over_grid_vs_tau1.svg").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
 fn a_diverged_point_is_a_row() {
     let dir = scratch("diverged");
     let sweep = json!({

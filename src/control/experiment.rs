@@ -67,6 +67,10 @@ pub struct Experiment {
     pub windows: Vec<WindowReport>,
     /// The whole grid of the surface window, with its start.
     pub surface: Option<(SimTime, Vec<Candidate>)>,
+    /// A constrained problem over two channels: the window cost over every grid pair
+    /// `(τ_1, τ_2)` of the surface window, the budget ignored (`x` holds both delays),
+    /// with the window's start.
+    pub landscape: Option<(SimTime, Vec<Candidate>)>,
 }
 
 impl Experiment {
@@ -104,8 +108,13 @@ fn evaluate(world: &CoSim, delays: &Delays, x: &[f64], t: SimTime, t_end: SimTim
     let Some(taus) = delays.taus(x) else {
         return f64::NAN;
     };
+    evaluate_taus(world, delays, &taus, t, t_end)
+}
+
+/// Measures every channel at delays `taus` [s] on a fork of `world` over `[t, t_end)`.
+fn evaluate_taus(world: &CoSim, delays: &Delays, taus: &[f64], t: SimTime, t_end: SimTime) -> f64 {
     let mut fork = world.clone();
-    let Ok(achieved) = fork.set_taus(t, &taus, &delays.achieved(&taus)) else {
+    let Ok(achieved) = fork.set_taus(t, taus, &delays.achieved(taus)) else {
         return f64::INFINITY;
     };
     match fork.advance_to(t_end, &mut ()) {
@@ -219,6 +228,11 @@ impl Controller {
         } else {
             Vec::new()
         };
+        let landscape_points = if spec.surface_window.is_some() {
+            delays.landscape(spec.grid_step)
+        } else {
+            Vec::new()
+        };
         let no_opt = delays.equal(&spec.initial);
         let names = channel_names(&scenario.channels);
         let period = scenario.measurement_period;
@@ -309,6 +323,22 @@ impl Controller {
             }
             if surface_here {
                 exp.surface = grid.clone().map(|g| (t, g));
+                if !landscape_points.is_empty() {
+                    let costs: Vec<f64> = landscape_points
+                        .par_iter()
+                        .map(|taus| evaluate_taus(live_world, &delays, taus, t, t_end))
+                        .collect();
+                    let points = landscape_points.iter().zip(costs);
+                    exp.landscape = Some((
+                        t,
+                        points
+                            .map(|(x, objective)| Candidate {
+                                x: x.clone(),
+                                objective,
+                            })
+                            .collect(),
+                    ));
+                }
             }
             // Every method picks a feasible point (DSM and Nelder–Mead only ask feasible
             // ones, the grid holds only feasible ones, `initial` is validated); rounding

@@ -126,33 +126,83 @@ impl Delays {
         }
     }
 
-    /// Every feasible grid point with spacing `step` from `τ_min` (product over the
-    /// controlled coordinates), in lexicographic order.
-    pub fn grid(&self, step: f64) -> Vec<Vec<f64>> {
-        let count = ((self.tau_max - self.tau_min) / step + 1e-9).floor() as usize + 1;
-        let axis: Vec<f64> = (0..count)
+    /// The grid values of one delay: spacing `step` from `τ_min` up to `τ_max`.
+    fn axis(&self, step: f64) -> Vec<f64> {
+        let count = grid_count(self.tau_min, self.tau_max, step);
+        (0..count)
             .map(|i| {
                 let v = self.tau_min + i as f64 * step;
                 // Snap to whole nanoseconds (0.001 + 6 × 0.001 = 0.007, not 0.0070000001).
                 (v * 1e9).round() / 1e9
             })
-            .collect();
-        let mut points: Vec<Vec<f64>> = vec![Vec::new()];
-        for _ in 0..self.dim() {
-            points = points
-                .into_iter()
-                .flat_map(|p| {
-                    axis.iter().map(move |&v| {
-                        let mut q = p.clone();
-                        q.push(v);
-                        q
-                    })
-                })
-                .collect();
-        }
+            .collect()
+    }
+
+    /// Every feasible grid point with spacing `step` from `τ_min` (product over the
+    /// controlled coordinates), in lexicographic order.
+    pub fn grid(&self, step: f64) -> Vec<Vec<f64>> {
+        let mut points = product(&self.axis(step), self.dim());
         points.retain(|x| self.taus(x).is_some());
         points
     }
+
+    /// The landscape of a constrained problem over two channels: every pair of grid
+    /// delays `(τ_1, τ_2)` (spacing `step`, both within the bounds), the budget ignored,
+    /// in lexicographic order; empty for any other problem. The budget line runs
+    /// through it, so it shows where the constrained optimum sits in the whole space.
+    pub fn landscape(&self, step: f64) -> Vec<Vec<f64>> {
+        match self.problem {
+            Problem::Constrained { .. } if self.k.len() == 2 => product(&self.axis(step), 2),
+            _ => Vec::new(),
+        }
+    }
+
+    /// The budget line of a two-channel constrained problem: `τ_2` as a function of
+    /// `τ_1` [s] (`None` where the budget leaves nothing, or for any other problem).
+    pub fn budget_line(&self, tau1: f64) -> Option<f64> {
+        match self.problem {
+            Problem::Constrained { budget } if self.k.len() == 2 => {
+                let left = budget - self.k[0] / tau1;
+                (left > 0.0).then(|| self.k[1] / left)
+            }
+            _ => None,
+        }
+    }
+
+    /// The budget line of a two-channel constrained problem as `τ_1` of `τ_2` [s].
+    pub fn budget_line_inverse(&self, tau2: f64) -> Option<f64> {
+        match self.problem {
+            Problem::Constrained { budget } if self.k.len() == 2 => {
+                let left = budget - self.k[1] / tau2;
+                (left > 0.0).then(|| self.k[0] / left)
+            }
+            _ => None,
+        }
+    }
+}
+
+/// Number of grid values from `lo` to `hi` at spacing `step` (both ends included when
+/// `hi − lo` is a whole number of steps).
+pub fn grid_count(lo: f64, hi: f64, step: f64) -> usize {
+    ((hi - lo) / step + 1e-9).floor() as usize + 1
+}
+
+/// Every vector of `dim` values from `axis`, in lexicographic order.
+fn product(axis: &[f64], dim: usize) -> Vec<Vec<f64>> {
+    let mut points: Vec<Vec<f64>> = vec![Vec::new()];
+    for _ in 0..dim {
+        points = points
+            .into_iter()
+            .flat_map(|p| {
+                axis.iter().map(move |&v| {
+                    let mut q = p.clone();
+                    q.push(v);
+                    q
+                })
+            })
+            .collect();
+    }
+    points
 }
 
 #[cfg(test)]

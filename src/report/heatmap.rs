@@ -54,6 +54,9 @@ pub struct Heatmap<'a> {
     /// A path drawn over the cells as a line with markers, its end marked larger (an
     /// optimizer's trajectory); empty for none. Non-finite points are skipped.
     pub path_overlay: &'a [(f64, f64)],
+    /// A curve drawn over the cells as a plain white line (a constraint's boundary, such
+    /// as a budget line); empty for none. Non-finite points are skipped.
+    pub line_overlay: &'a [(f64, f64)],
 }
 
 /// Renders `map` as an SVG document.
@@ -216,6 +219,20 @@ fn render(map: &Heatmap, target: &Path) -> Result<String> {
             })
         });
         chart.draw_series(cells).map_err(&err)?;
+        let line: Vec<(f64, f64)> = map
+            .line_overlay
+            .iter()
+            .copied()
+            .filter(|p| p.0.is_finite() && p.1.is_finite())
+            .collect();
+        if !line.is_empty() {
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    line,
+                    WHITE.stroke_width(3),
+                )))
+                .map_err(&err)?;
+        }
         if !overlay.is_empty() {
             let style = PATH.stroke_width(2);
             chart
@@ -302,8 +319,20 @@ mod tests {
             y: &y,
             values: &values,
             path_overlay: &path,
+            line_overlay: &[(1.0, 10.0), (6.5, 2.0)],
         };
         let svg = heatmap_svg(&map).unwrap();
+        let white_line = |svg: &str| {
+            svg.lines()
+                .any(|l| l.contains("<polyline") && l.to_uppercase().contains("#FFFFFF"))
+        };
+        assert!(white_line(&svg), "the white line overlay");
+        let none = heatmap_svg(&Heatmap {
+            line_overlay: &[],
+            ..map
+        })
+        .unwrap();
+        assert!(!white_line(&none), "no line overlay, no white line");
         assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
         for text in [
             "Grid search, window 3",
@@ -345,6 +374,7 @@ mod tests {
                 y,
                 values,
                 path_overlay,
+                line_overlay: path_overlay,
             };
             heatmap_svg(&map).unwrap_or_else(|e| panic!("{x:?} {y:?} {values:?}: {e}"));
         }
@@ -362,6 +392,7 @@ mod tests {
             y: &[1.0],
             values: &values,
             path_overlay: &[],
+            line_overlay: &[],
         };
         assert!(heatmap_svg(&base).is_ok());
         for map in [

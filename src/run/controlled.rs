@@ -257,6 +257,7 @@ fn write_surface(out: &Path, world: &CoSim, exp: &Experiment, names: &[String]) 
             y: &ys_ms,
             values: &values,
             path_overlay: &overlay,
+            line_overlay: &[],
         },
     )
 }

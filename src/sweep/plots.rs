@@ -1,4 +1,6 @@
 //! Plots of a sweep: `cost_vs_<axis>.svg` (mean cost against the first numeric axis,
+//! and for controlled runs with a live DSM `dsm_over_grid_vs_<axis>.svg` and
+//! `dsm_over_no_opt_vs_<axis>.svg`, its mean cost over those baselines' in each run,
 //! one line per combination of the other axes' values under `factorial`, averaged over
 //! draw axes — those whose pointer is `/seed` — with min–max bars) and, with two
 //! or more axes, `cost_heatmap.svg` (mean cost over the first two axes; cells holding
@@ -75,9 +77,27 @@ fn cost(r: &Record) -> f64 {
     r.row.mean_cost.unwrap_or(f64::NAN)
 }
 
+/// The ratio of the DSM's mean cost to a baseline's in one run (NaN where either is
+/// missing).
+fn dsm_over(r: &Record, baseline: &str) -> f64 {
+    let get = |m: &str| r.row.mean_cost_by_method.get(m).copied().flatten();
+    match (get("dsm"), get(baseline)) {
+        (Some(d), Some(b)) => d / b,
+        _ => f64::NAN,
+    }
+}
+
 /// Writes the plots of `records` (sorted by index) into `out`.
 pub fn write(out: &Path, plan: &Plan, records: &[Record]) -> Result<()> {
-    cost_vs(out, plan, records)?;
+    cost_vs(out, plan, records, &Metric::COST)?;
+    // Controlled runs with a live DSM: its cost over the baselines' in the same run (the
+    // ratio compares methods on the same windows, where the costs themselves also move
+    // with each run's own trajectory).
+    for m in [Metric::DSM_OVER_GRID, Metric::DSM_OVER_NO_OPT] {
+        if records.iter().any(|r| (m.value)(r).is_finite()) {
+            cost_vs(out, plan, records, &m)?;
+        }
+    }
     if plan.axes.len() >= 2 {
         heatmap(out, plan, records)?;
     }
@@ -110,11 +130,45 @@ fn value_label(axis: &Axis, v: usize) -> String {
     }
 }
 
-/// `cost_vs_<axis>.svg`: mean cost against the first numeric axis that is not a draw
-/// axis, one line per combination of the other non-draw axes (under `factorial`). Draw
-/// axes (pointer `/seed`) are averaged over: each marker is the mean of the finite costs
-/// over the draws, with a bar from their minimum to their maximum.
-fn cost_vs(out: &Path, plan: &Plan, records: &[Record]) -> Result<()> {
+/// What a line plot of a sweep shows per point.
+struct Metric {
+    /// File name before `_vs_<axis>.svg`.
+    file: &'static str,
+    /// Title words before `vs <axis>`.
+    what: &'static str,
+    /// y-axis label, with the unit.
+    label: &'static str,
+    /// The value of one point (NaN where it has none).
+    value: fn(&Record) -> f64,
+}
+
+impl Metric {
+    const COST: Metric = Metric {
+        file: "cost",
+        what: "mean cost",
+        label: COST,
+        value: cost,
+    };
+    const DSM_OVER_GRID: Metric = Metric {
+        file: "dsm_over_grid",
+        what: "DSM / grid optimum (mean costs)",
+        label: "DSM / grid optimum [1]",
+        value: |r| dsm_over(r, "grid"),
+    };
+    const DSM_OVER_NO_OPT: Metric = Metric {
+        file: "dsm_over_no_opt",
+        what: "DSM / no optimization (mean costs)",
+        label: "DSM / no optimization [1]",
+        value: |r| dsm_over(r, "no_opt"),
+    };
+}
+
+/// `<metric>_vs_<axis>.svg`: a metric (mean cost, or the DSM's ratio to a baseline)
+/// against the first numeric axis that is not a draw axis, one line per combination of
+/// the other non-draw axes (under `factorial`). Draw axes (pointer `/seed`) are averaged
+/// over: each marker is the mean of the finite values over the draws, with a bar from
+/// their minimum to their maximum.
+fn cost_vs(out: &Path, plan: &Plan, records: &[Record], metric: &Metric) -> Result<()> {
     let draws: Vec<usize> = (0..plan.axes.len())
         .filter(|&k| plan.combine == Combine::Factorial && is_draw(&plan.axes[k]))
         .collect();
@@ -143,7 +197,7 @@ fn cost_vs(out: &Path, plan: &Plan, records: &[Record]) -> Result<()> {
             .or_default()
             .entry(idx[xa])
             .or_default()
-            .push(cost(r));
+            .push((metric.value)(r));
     }
     let averaged = !draws.is_empty();
     let series: Vec<Series> = lines
@@ -176,22 +230,22 @@ fn cost_vs(out: &Path, plan: &Plan, records: &[Record]) -> Result<()> {
                     .collect::<Vec<_>>()
                     .join(", ")
             } else {
-                "mean cost".to_string()
+                metric.what.to_string()
             };
             Series::new(label, points).with_bars(bars)
         })
         .collect();
     let name = &plan.axes[xa].name;
-    let mut title = format!("{} — mean cost vs {name}", plan.name);
+    let mut title = format!("{} — {} vs {name}", plan.name, metric.what);
     if averaged {
         let over: Vec<&str> = draws.iter().map(|&k| plan.axes[k].name.as_str()).collect();
         title.push_str(&format!(" (mean over {}; bars: min–max)", over.join(", ")));
     }
     write_line_plot(
-        &out.join(format!("cost_vs_{name}.svg")),
+        &out.join(format!("{}_vs_{name}.svg", metric.file)),
         &LinePlot {
             markers: true,
-            ..LinePlot::new(&title, &x_label, COST, &series)
+            ..LinePlot::new(&title, &x_label, metric.label, &series)
         },
     )
 }
@@ -254,6 +308,7 @@ fn heatmap(out: &Path, plan: &Plan, records: &[Record]) -> Result<()> {
             y: &y,
             values: &values,
             path_overlay: &[],
+            line_overlay: &[],
         },
     )
 }

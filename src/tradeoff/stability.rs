@@ -208,6 +208,7 @@ fn write_map(out: &Path, map: &StabilityMap) -> Result<()> {
             y: &y,
             values: &outcome,
             path_overlay: &[],
+            line_overlay: &[],
         },
     )?;
     let max_w = grid(&|c| match c.outcome {
@@ -229,6 +230,7 @@ fn write_map(out: &Path, map: &StabilityMap) -> Result<()> {
             y: &y,
             values: &max_w,
             path_overlay: &[],
+            line_overlay: &[],
         },
     )
 }

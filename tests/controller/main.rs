@@ -163,6 +163,26 @@ fn a_controller_needs_valid_settings() {
         json!({"problem": "cp", "budget": 400, "tau_max": 0.05, "surface_window": 0.5}),
         "controller.surface_window",
     );
+    // Grid searches are bounded (40 000 points per window): 1 µs steps over [1, 50] ms
+    // give 2.4e9 points on the landscape of two delays; 2 µs steps give 24 501 points
+    // on the one controlled delay, which is allowed.
+    let fine = json!({"problem": "cp", "budget": 400, "tau_max": 0.05, "grid_step": 1e-6,
+                      "baselines": ["grid"], "surface_window": 0.0});
+    bad(fine.clone(), "controller.grid_step");
+    let mut one = fine;
+    one.as_object_mut().unwrap().remove("surface_window");
+    one["grid_step"] = json!(2e-6);
+    let mut v: Value = json!({
+        "name": "x", "seed": 1, "duration": 1.0, "dt": 0.001,
+        "model": {"grid": {"rows": 4, "cols": 4, "spacing": 1.8, "mass": 1.0, "size": 0.2}},
+        "partition": {"quadrants": true},
+        "channels": [
+            {"name": "a", "tau": 0.005, "borders": [[1, 2], [1, 4]]},
+            {"name": "b", "tau": 0.005, "borders": [[2, 3], [3, 4]]}
+        ]
+    });
+    v["controller"] = one;
+    parse_str(&v.to_string(), "t").expect("24 501 grid points on one delay are allowed");
 }
 
 /// A shipped experiment, shortened to `duration` s, with only the listed baselines.
@@ -225,6 +245,64 @@ fn time_cp_in_the_thesis_reading_gives_forces_the_smaller_delay_in_most_windows(
     eprintln!("time CP thesis reading, 12 s: forces faster in {forces}, states in {states} of {n}");
     assert_eq!(states, 0, "states faster in {states} windows");
     assert!(2 * forces > n, "forces faster in {forces} of {n} windows");
+}
+
+#[test]
+fn the_landscape_covers_the_square_and_agrees_with_the_baselines_measured_beside_it() {
+    // Space CP (thesis reading), 3 s, landscape of the window [2, 3) s over 1–20 ms on
+    // both channels. The landscape forks the same state as the baselines: its point at
+    // equal delays (5, 5) ms is the no-optimization point and must cost exactly what the
+    // no-optimization baseline measured.
+    let path = format!(
+        "{}/scenarios/grid16_space_cp.json",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let mut v: Value = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    v["duration"] = json!(3.0);
+    let c = v["controller"].as_object_mut().expect("controller");
+    c.insert("tau_max".into(), json!(0.02));
+    c.insert("surface_window".into(), json!(2.0));
+    c.insert("baselines".into(), json!(["grid", "no_opt"]));
+    c.remove("dsm_delta");
+    let s = parse_str(&v.to_string(), "landscape").expect("valid");
+    let (_, exp) = run(&s);
+    let (t, points) = exp.landscape.as_ref().expect("a landscape");
+    assert_eq!(t.as_nanos(), 2_000_000_000);
+    assert_eq!(points.len(), 20 * 20, "1..20 ms squared");
+    let window = exp
+        .windows
+        .iter()
+        .find(|w| w.t_start == *t)
+        .expect("window");
+    let at = |x: [f64; 2]| {
+        points
+            .iter()
+            .find(|c| (c.x[0] - x[0]).abs() < 1e-12 && (c.x[1] - x[1]).abs() < 1e-12)
+            .unwrap_or_else(|| panic!("no landscape point {x:?}"))
+            .objective
+    };
+    let no_opt = &window
+        .baselines
+        .iter()
+        .find(|b| b.name == "no_opt")
+        .unwrap()
+        .candidate;
+    assert_eq!(at([0.005, 0.005]).to_bits(), no_opt.objective.to_bits());
+    // Every cost is measured (finite, or +∞ for a diverged fork), never NaN.
+    assert!(points.iter().all(|c| !c.objective.is_nan()));
+    let grid = window.grid_best.as_ref().expect("grid");
+    let best_square = points
+        .iter()
+        .map(|c| c.objective)
+        .fold(f64::INFINITY, f64::min);
+    eprintln!(
+        "landscape [2, 3) s: best {best_square:.4}, grid on the budget line {:.4}",
+        grid.objective
+    );
+    assert!(
+        best_square <= no_opt.objective,
+        "the square holds the no-opt point"
+    );
 }
 
 #[test]

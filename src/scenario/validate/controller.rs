@@ -8,6 +8,12 @@ use crate::kernel::SimTime;
 use crate::scenario::file::{ControllerFile, MeasureFile, MethodFile, ProblemKind, RampFile};
 use crate::scenario::model::{ChannelSpec, ControllerSpec, Measure, Method, Problem, Ramp};
 
+/// Most points a grid search may measure in one window (the grid baseline or method over
+/// the controlled delays, and the surface window's landscape over both delays of a
+/// two-channel constrained problem); each point is a fork of the whole co-simulation
+/// run over the window.
+pub const MAX_GRID_POINTS: f64 = 40_000.0;
+
 fn method(m: MethodFile) -> Method {
     match m {
         MethodFile::Dsm => Method::Dsm,
@@ -223,6 +229,32 @@ pub(super) fn controller(
             Some(t)
         }
     };
+    let wants_grid = live == Method::Grid || baselines.contains(&Method::Grid);
+    if wants_grid || surface_window.is_some() {
+        let count = ((tau_max - tau_min) / grid_step + 1e-9).floor() + 1.0;
+        let controlled = match problem {
+            Problem::Constrained { .. } => n - 1,
+            Problem::Unconstrained { .. } => n,
+        };
+        let landscape = matches!(problem, Problem::Constrained { .. }) && n == 2;
+        let dims = if surface_window.is_some() && landscape {
+            2
+        } else {
+            controlled
+        };
+        let points = count.powi(dims as i32);
+        if points > MAX_GRID_POINTS {
+            return Err(Error::invalid(
+                "controller.grid_step",
+                format!(
+                    "gives {} grid values per delay over [tau_min, tau_max], {} points over                      {dims} delays; at most {} points per window are measured (raise                      grid_step or narrow the bounds)",
+                    num(count),
+                    num(points),
+                    num(MAX_GRID_POINTS)
+                ),
+            ));
+        }
+    }
     Ok(ControllerSpec {
         method: live,
         problem,
