@@ -70,7 +70,7 @@ if [ $studies -eq 1 ]; then
   study results/tradeoff/horizon_10s tradeoff scenarios/grid16_monolithic.json --duration 10
   study results/tradeoff/horizon_30s tradeoff scenarios/grid16_monolithic.json --duration 30
   study results/tradeoff/grid16_space_fixed tradeoff scenarios/grid16_space_fixed.json --duration 3
-  study results/tradeoff/tdma4_space_fixed tradeoff scenarios/tdma4_space_fixed.json --duration 3
+  study results/tradeoff/tdma4_space_fixed_hold tradeoff scenarios/tdma4_space_fixed_hold.json --duration 3
   study results/tradeoff/grid16_rk4 tradeoff scenarios/grid16_rk4.json --duration 3
   study results/stability stability-map scenarios/grid16_monolithic.json --duration 12
   study results/coupling coupling scenarios/grid16_space_fixed.json

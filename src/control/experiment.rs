@@ -228,7 +228,7 @@ impl Controller {
         } else {
             Vec::new()
         };
-        let landscape_points = if spec.surface_window.is_some() {
+        let landscape_points = if spec.landscape {
             delays.landscape(spec.grid_step)
         } else {
             Vec::new()

@@ -111,7 +111,8 @@ fn step_series(label: String, exp: &Experiment, f: &dyn Fn(usize) -> f64) -> Ser
     Series::new(label, points)
 }
 
-/// cost_methods.svg, delays_optimum.svg and (with a surface window) surface.svg.
+/// cost_methods.svg, delays_optimum.svg and (with a surface window) surface.svg and
+/// surface.csv.
 pub(super) fn write_plots(out: &Path, world: &CoSim, exp: &Experiment) -> Result<()> {
     let Some(spec) = spec(world) else {
         return Ok(());
@@ -187,6 +188,24 @@ fn write_surface(out: &Path, world: &CoSim, exp: &Experiment, names: &[String]) 
     };
     let name = &world.scenario().name;
     let window = exp.windows.iter().find(|w| w.t_start == *t);
+    // The points themselves, for the numbers the plot only shows: the grid, then the
+    // DSM's candidates of the window in the order it measured them.
+    let mut csv = String::from("method,");
+    csv.extend(names.iter().map(|n| format!("tau_{n}_s,")));
+    csv.push_str("objective\n");
+    let dsm = window.map_or(&[][..], |w| &w.dsm_path[..]);
+    let rows = grid
+        .iter()
+        .map(|c| ("grid", c))
+        .chain(dsm.iter().map(|c| ("dsm", c)));
+    for (method, c) in rows {
+        csv.push_str(method);
+        for x in &c.x {
+            csv.push_str(&format!(",{x}"));
+        }
+        csv.push_str(&format!(",{}\n", c.objective));
+    }
+    crate::output::write_atomic(&out.join("surface.csv"), csv.as_bytes())?;
     let path: Vec<(f64, f64)> = window
         .map(|w| {
             w.dsm_path

@@ -109,14 +109,17 @@ pub(super) fn write(out: &Path, world: &CoSim, exp: &Experiment) -> Result<()> {
     let xs_ms: Vec<f64> = xs.iter().map(|x| x * 1e3).collect();
     let ys_ms: Vec<f64> = ys.iter().map(|y| y * 1e3).collect();
     let title = format!(
-        "{} — cost over [{t0}, {t1}) s; white: budget line, red: DSM candidates, grey: diverged",
+        "{} — window cost over [{t0}, {t1}) s",
         world.scenario().name
     );
     write_heatmap(
         &out.join("landscape.svg"),
         &Heatmap {
             title: &title,
-            x_label: &format!("delay {} [ms]", names[0]),
+            x_label: &format!(
+                "delay {} [ms]   (white: budget line; red: DSM candidates; grey: fork diverged)",
+                names[0]
+            ),
             y_label: &format!("delay {} [ms]", names[1]),
             value_label: "window cost C [m]",
             x: &xs_ms,

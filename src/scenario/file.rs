@@ -1002,4 +1002,9 @@ pub struct ControllerFile {
         skip_serializing_if = "Option::is_none"
     )]
     pub surface_window: Option<f64>,
+    /// Two-channel constrained problem: also measure the surface window's cost over
+    /// every grid pair of both delays, the budget ignored (landscape.csv/.svg); default
+    /// false. Needs `surface_window`; costs one fork per grid pair.
+    #[serde(default)]
+    pub landscape: bool,
 }

@@ -479,6 +479,8 @@ pub struct ControllerSpec {
     pub grid_step: f64,
     /// Start of the window whose whole cost surface is plotted with the DSM path.
     pub surface_window: Option<SimTime>,
+    /// Measure the landscape of the surface window (two-channel CP only).
+    pub landscape: bool,
 }
 
 /// A validated scenario.

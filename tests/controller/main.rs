@@ -167,10 +167,21 @@ fn a_controller_needs_valid_settings() {
     // give 2.4e9 points on the landscape of two delays; 2 µs steps give 24 501 points
     // on the one controlled delay, which is allowed.
     let fine = json!({"problem": "cp", "budget": 400, "tau_max": 0.05, "grid_step": 1e-6,
-                      "baselines": ["grid"], "surface_window": 0.0});
+                      "baselines": ["grid"], "surface_window": 0.0, "landscape": true});
     bad(fine.clone(), "controller.grid_step");
+    // A landscape needs a window and two channels under CP.
+    bad(
+        json!({"problem": "cp", "budget": 400, "tau_max": 0.05, "landscape": true}),
+        "controller.landscape",
+    );
+    bad(
+        json!({"problem": "up", "penalty": 5e-4, "tau_max": 0.05, "surface_window": 0.0,
+               "landscape": true}),
+        "controller.landscape",
+    );
     let mut one = fine;
     one.as_object_mut().unwrap().remove("surface_window");
+    one.as_object_mut().unwrap().remove("landscape");
     one["grid_step"] = json!(2e-6);
     let mut v: Value = json!({
         "name": "x", "seed": 1, "duration": 1.0, "dt": 0.001,
@@ -193,6 +204,7 @@ fn shipped(name: &str, duration: f64, baselines: Value) -> Scenario {
     v["duration"] = json!(duration);
     let c = v["controller"].as_object_mut().expect("controller");
     c.remove("surface_window");
+    c.remove("landscape");
     c.remove("dsm_delta");
     c.insert("baselines".into(), baselines);
     parse_str(&v.to_string(), name).unwrap_or_else(|e| panic!("{name}: {e}"))
@@ -262,6 +274,7 @@ fn the_landscape_covers_the_square_and_agrees_with_the_baselines_measured_beside
     let c = v["controller"].as_object_mut().expect("controller");
     c.insert("tau_max".into(), json!(0.02));
     c.insert("surface_window".into(), json!(2.0));
+    c.insert("landscape".into(), json!(true));
     c.insert("baselines".into(), json!(["grid", "no_opt"]));
     c.remove("dsm_delta");
     let s = parse_str(&v.to_string(), "landscape").expect("valid");
@@ -444,6 +457,68 @@ fn in_the_thesis_reading_a_small_simplex_beats_no_optimization_on_space_cp() {
     let no_opt = exp.mean("no_opt", "dsm").expect("no_opt");
     eprintln!("space CP D_s 2 ms thesis reading, 12 s: DSM {dsm:.4}, no-opt {no_opt:.4} m");
     assert!(dsm < no_opt, "DSM {dsm} vs no-optimization {no_opt}");
+}
+
+/// Windows of `exp` starting in `[from, to)` s where the grid optimum of a two-channel
+/// CP at 400 Hz gives the first channel the smaller delay, and the second.
+fn faster_channel_counts(exp: &Experiment, from: f64, to: f64) -> (usize, usize) {
+    let (mut first, mut second) = (0, 0);
+    for w in &exp.windows {
+        let t = w.t_start.as_secs_f64();
+        if t < from || t >= to {
+            continue;
+        }
+        let tau1 = w.grid_best.as_ref().expect("grid").x[0];
+        let tau2 = 1.0 / (400.0 - 1.0 / tau1);
+        first += usize::from(tau1 < tau2 - 1e-12);
+        second += usize::from(tau2 < tau1 - 1e-12);
+    }
+    (first, second)
+}
+
+#[test]
+fn in_the_thesis_reading_the_near_borders_get_the_smaller_delay_and_follow_the_load() {
+    // Thesis reading, thesis settings (D_s 12 ms live). With body 1 driven over
+    // [0, 12) s the grid optimum gives the near borders (τ1) the smaller delay more
+    // often than the far ones (6 vs 2 of 12 windows in the stored run). With the load
+    // moving from body 1 to body 16 (`_ramp`) the preference moves with it: τ1 faster
+    // more often in [0, 15) s, τ2 faster more often in [15, 30) s (9 vs 2 and 4 vs 9).
+    let (_, exp) = run(&shipped("grid16_space_cp", 12.0, json!(["grid"])));
+    let (near, far) = faster_channel_counts(&exp, 0.0, 12.0);
+    eprintln!("space CP thesis reading, [0, 12) s: τ1 faster in {near}, τ2 in {far}");
+    assert!(near > far, "near {near} vs far {far}");
+    let (_, ramp) = run(&shipped("grid16_space_cp_ramp", 30.0, json!(["grid"])));
+    let (early1, early2) = faster_channel_counts(&ramp, 0.0, 15.0);
+    let (late1, late2) = faster_channel_counts(&ramp, 15.0, 30.0);
+    eprintln!("ramp thesis reading: [0, 15) s {early1} vs {early2}; [15, 30) s {late1} vs {late2}");
+    assert!(early1 > early2, "early: τ1 {early1} vs τ2 {early2}");
+    assert!(late2 > late1, "late: τ2 {late2} vs τ1 {late1}");
+}
+
+#[test]
+fn in_the_thesis_reading_space_up_dsm_beats_its_four_neighbours() {
+    // Thesis: on space UP the DSM beats {τ1 ± δ, τ2} and {τ1, τ2 ± δ}; in the thesis
+    // reading all four, over the whole 30 s (under sample and hold three of four).
+    let path = format!(
+        "{}/scenarios/grid16_space_up.json",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let mut v: Value = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    let c = v["controller"].as_object_mut().expect("controller");
+    c.remove("surface_window");
+    c.insert("baselines".into(), json!([]));
+    let (_, exp) = run(&parse_str(&v.to_string(), "space_up").expect("valid"));
+    let dsm = exp.mean("dsm", "dsm").expect("dsm");
+    for name in [
+        "dsm_tau1_plus",
+        "dsm_tau1_minus",
+        "dsm_tau2_plus",
+        "dsm_tau2_minus",
+    ] {
+        let other = exp.mean(name, "dsm").expect(name);
+        eprintln!("space UP thesis reading: DSM {dsm:.4}, {name} {other:.4}");
+        assert!(dsm < other, "DSM {dsm} vs {name} {other}");
+    }
 }
 
 #[test]

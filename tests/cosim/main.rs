@@ -112,23 +112,27 @@ fn cost_rises_with_delay_on_the_thesis_scene() {
 
 #[test]
 fn cost_is_zero_while_no_force_has_acted() {
-    let mut v = space(6.0, 0.005, 0.005, None);
-    v["forces"] = json!([{"body": 1, "amplitude": [0, 0, 20], "omega": 2.0, "from": 3.0}]);
-    let (world, _) = run(&v);
-    let e = world.epochs();
-    assert_eq!(e.len(), 6);
-    // At rest w is the rounding of |Δp| − L for grid coordinates like 3 × 1.8 (a few
-    // 1e-16 m per link): zero to working precision.
-    for w in &e[..3] {
-        assert!(
-            w.cost < 1e-13,
-            "window {}: cost {} at rest",
-            w.t_start,
-            w.cost
-        );
-    }
-    for w in &e[3..] {
-        assert!(w.cost > 1e-6, "window {}: the load must show", w.t_start);
+    // Both readings of delay: latency = τ (the default, with the default coupling) and
+    // sample and hold (latency 0).
+    for latency in [None, Some(0.0)] {
+        let mut v = space(6.0, 0.005, 0.005, latency);
+        v["forces"] = json!([{"body": 1, "amplitude": [0, 0, 20], "omega": 2.0, "from": 3.0}]);
+        let (world, _) = run(&v);
+        let e = world.epochs();
+        assert_eq!(e.len(), 6);
+        // At rest w is the rounding of |Δp| − L for grid coordinates like 3 × 1.8 (a few
+        // 1e-16 m per link): zero to working precision.
+        for w in &e[..3] {
+            assert!(
+                w.cost < 1e-13,
+                "latency {latency:?}, window {}: cost {} at rest",
+                w.t_start,
+                w.cost
+            );
+        }
+        for w in &e[3..] {
+            assert!(w.cost > 1e-6, "window {}: the load must show", w.t_start);
+        }
     }
 }
 

@@ -229,6 +229,13 @@ pub(super) fn controller(
             Some(t)
         }
     };
+    let landscape_possible = matches!(problem, Problem::Constrained { .. }) && n == 2;
+    if c.landscape && !(landscape_possible && surface_window.is_some()) {
+        return Err(Error::invalid(
+            "controller.landscape",
+            "needs a constrained problem over two channels and a surface_window",
+        ));
+    }
     let wants_grid = live == Method::Grid || baselines.contains(&Method::Grid);
     if wants_grid || surface_window.is_some() {
         let count = ((tau_max - tau_min) / grid_step + 1e-9).floor() + 1.0;
@@ -236,12 +243,7 @@ pub(super) fn controller(
             Problem::Constrained { .. } => n - 1,
             Problem::Unconstrained { .. } => n,
         };
-        let landscape = matches!(problem, Problem::Constrained { .. }) && n == 2;
-        let dims = if surface_window.is_some() && landscape {
-            2
-        } else {
-            controlled
-        };
+        let dims = if c.landscape { 2 } else { controlled };
         let points = count.powi(dims as i32);
         if points > MAX_GRID_POINTS {
             return Err(Error::invalid(
@@ -271,5 +273,6 @@ pub(super) fn controller(
         dsm_delta,
         grid_step,
         surface_window,
+        landscape: c.landscape,
     })
 }
