@@ -14,9 +14,9 @@
 #
 # --studies also regenerates the speed-accuracy studies (results/tradeoff/, with its
 # subdirectories), the stability map (results/stability/) and the coupling study
-# (results/coupling/) with the commands docs/accuracy.md and docs/guide.md
-# give; they take minutes and their wall-time columns change on every run, so the
-# default leaves them alone.
+# (results/coupling/) with the commands docs/accuracy.md and docs/guide.md give, and
+# the D_s sweeps (results/sweeps/dsm_size_cp{,_hold}/); they take minutes and their
+# wall-time columns change on every run, so the default leaves them alone.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 studies=0
@@ -74,5 +74,13 @@ if [ $studies -eq 1 ]; then
   study results/tradeoff/grid16_rk4 tradeoff scenarios/grid16_rk4.json --duration 3
   study results/stability stability-map scenarios/grid16_monolithic.json --duration 12
   study results/coupling coupling scenarios/grid16_space_fixed.json
+  # The D_s sweeps (results/README.md, "Does optimizing pay?"): rerun from scratch; the
+  # per-point directories stay out of git (results/sweeps/.gitignore).
+  for s in dsm_size_cp dsm_size_cp_hold; do
+    rm -rf "results/sweeps/$s"
+    "$bin" sweep "scenarios/sweeps/$s.json" --out "results/sweeps/$s" >/dev/null \
+      || { echo "results/sweeps/$s: failed"; exit 1; }
+    echo "results/sweeps/$s: regenerated"
+  done
 fi
 exit 0
