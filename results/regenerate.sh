@@ -60,6 +60,16 @@ for summary in results/*/summary.json; do
   echo "$line"
 done
 [ $found -eq 1 ] || echo "no stored runs found under results/"
+# Distances of bodies 1 and 16 from the monolithic run (results/README.md, "Body
+# errors"), from the stored traces just written.
+for reading in thesis_reading sample_and_hold; do
+  suffix=""; [ "$reading" = sample_and_hold ] && suffix=_hold
+  "$bin" distance results/grid16_monolithic results/grid16_space_cp_no_opt$suffix \
+    results/grid16_space_cp$suffix results/grid16_space_cp_ds2$suffix --bodies 1,16 \
+    --out "results/body_errors/$reading" >/dev/null \
+    || { echo "results/body_errors/$reading: failed"; exit 1; }
+  echo "results/body_errors/$reading: regenerated"
+done
 if [ $studies -eq 1 ]; then
   study() {
     local out=$1; shift

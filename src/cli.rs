@@ -138,6 +138,26 @@ pub enum Command {
         #[arg(long, value_name = "S")]
         duration: Option<f64>,
     },
+    /// Distance of body positions from a reference run: how long runs of a chaotic scene
+    /// stay comparable.
+    ///
+    /// Reads trace.csv of REFERENCE and of each RUN directory (traced at the same
+    /// times) and writes DIR/distance.csv (t, then |p_run − p_ref| [m] per run and body)
+    /// and DIR/distance.svg (log scale). At most 12 runs × bodies. Exit codes: 0 done,
+    /// 1 unreadable trace, 2 a trace of other times, a missing body or too many curves.
+    Distance {
+        /// Reference run directory (holding trace.csv).
+        reference: PathBuf,
+        /// Compared run directories.
+        #[arg(required = true)]
+        runs: Vec<PathBuf>,
+        /// Body ids to compare, comma-separated.
+        #[arg(long, value_delimiter = ',', required = true)]
+        bodies: Vec<u32>,
+        /// Output directory (created if missing).
+        #[arg(long, value_name = "DIR")]
+        out: PathBuf,
+    },
     /// What-if sweep: run a base scenario with fields set from the axes of a sweep file,
     /// one run per point, in parallel.
     ///
@@ -298,6 +318,16 @@ pub fn execute(command: Command) -> crate::Result<()> {
             let bounded = cells.iter().filter(|c| c.bounded()).count();
             say!("{} cells, {} bounded", cells.len(), bounded);
             say!("wrote {}", out.join("coupling.csv").display());
+            Ok(())
+        }
+        Command::Distance {
+            reference,
+            runs,
+            bodies,
+            out,
+        } => {
+            crate::distance::command(&reference, &runs, &bodies, &out)?;
+            say!("wrote {}", out.join("distance.csv").display());
             Ok(())
         }
         Command::Sweep {

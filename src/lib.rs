@@ -58,6 +58,7 @@ pub mod console;
 pub mod control;
 pub mod cosim;
 pub mod coupling_study;
+pub mod distance;
 pub mod error;
 pub mod kernel;
 pub mod multibody;

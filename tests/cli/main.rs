@@ -337,6 +337,8 @@ fn every_subcommand_has_help() {
         "stability-map",
         "sweep",
         "sweep-merge",
+        "coupling",
+        "distance",
     ];
     for sub in subcommands {
         assert!(listing.contains(sub), "`--help` lists `{sub}`");
@@ -407,4 +409,79 @@ fn a_controlled_run_writes_the_output_contract() {
         out.join("surface.svg").exists(),
         "the surface of window 1 s"
     );
+}
+
+#[test]
+fn distance_measures_how_far_runs_drift_from_a_reference() {
+    let dir = scratch("distance");
+    let runs = |name: &str, v: Value| {
+        let sub = dir.join(name);
+        std::fs::create_dir_all(&sub).unwrap();
+        let (o, out) = run_in(&sub, &v);
+        assert!(o.status.success(), "{}", said(&o));
+        out
+    };
+    let reference = runs("mono", short_grid());
+    let same = runs("same", short_grid());
+    let mut pushed = short_grid();
+    pushed["forces"][0]["amplitude"] = json!([0, 0, 21]);
+    let other = runs("other", pushed);
+    let out = dir.join("cmp");
+    let args = |bodies: &str, list: &[&Path]| {
+        let mut a = vec!["distance".to_string(), reference.display().to_string()];
+        a.extend(list.iter().map(|p| p.display().to_string()));
+        a.extend(["--bodies".into(), bodies.into(), "--out".into()]);
+        a.push(out.display().to_string());
+        a
+    };
+    let call = |a: Vec<String>| bin().args(a).output().expect("spawn");
+    let o = call(args("1,16", &[&same, &other]));
+    assert!(o.status.success(), "{}", said(&o));
+    let csv = std::fs::read_to_string(out.join("distance.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    let name = |p: &Path, b: &str| format!("{}_B{b}", p.display());
+    assert_eq!(
+        header,
+        [
+            "t".to_string(),
+            name(&same, "1"),
+            name(&same, "16"),
+            name(&other, "1"),
+            name(&other, "16")
+        ]
+    );
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 101, "2 s at every 20th step, and t = 0");
+    // The same scenario is at distance 0; a 5 % stronger push on body 1 moves body 1
+    // off at once, and reaches the far corner, body 16, only through the net: at 0.4 s
+    // body 16 is still 100 times closer than body 1, by 2 s both have drifted.
+    assert!(rows.iter().all(|r| r[1] == 0.0 && r[2] == 0.0));
+    assert_eq!((rows[0][3], rows[0][4]), (0.0, 0.0), "same start");
+    assert!(rows[20][3] > 1e-3, "body 1 at 0.4 s: {}", rows[20][3]);
+    assert!(
+        rows[20][4] < rows[20][3] / 100.0,
+        "body 16 at 0.4 s: {}",
+        rows[20][4]
+    );
+    assert!(
+        rows[100][3] > 1e-3 && rows[100][4] > 1e-3,
+        "both drift by 2 s"
+    );
+    let svg = std::fs::read_to_string(out.join("distance.svg")).unwrap();
+    assert!(svg.contains("|p − p_ref| [m]") && svg.contains("time t [s]"));
+    // A body the traces do not hold, too many curves, a trace of other times: exit 2.
+    let o = call(args("99", &[&same]));
+    assert_eq!(o.status.code(), Some(2), "{}", said(&o));
+    assert!(said(&o).contains("--bodies 99"), "{}", said(&o));
+    let o = call(args("1,2,3,4,5,6,7", &[&same, &other]));
+    assert_eq!(o.status.code(), Some(2), "{}", said(&o));
+    let mut longer = short_grid();
+    longer["duration"] = json!(1.0);
+    let short = runs("short", longer);
+    let o = call(args("1", &[&short]));
+    assert_eq!(o.status.code(), Some(2), "{}", said(&o));
+    assert!(said(&o).contains("not traced at the times"), "{}", said(&o));
 }
