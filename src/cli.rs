@@ -244,6 +244,9 @@ pub fn execute(command: Command) -> crate::Result<()> {
     match command {
         Command::Validate { scenario } => {
             let s = scenario::load(&scenario)?;
+            // Everything `run` builds before its first step that can still refuse the
+            // scenario: the controller's simplex must fit the feasible set.
+            crate::control::experiment::Controller::new(&s)?;
             say!(
                 "{}: ok — {} bodies, {} links, {} forces, {} steps of {} s, {} path, {} integrator",
                 scenario.display(),

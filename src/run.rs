@@ -60,6 +60,8 @@ pub fn run(scenario: &Scenario, out: &Path) -> Result<Outcome> {
 
 /// Runs `scenario` with `options` and writes its outputs into `out`.
 pub fn run_with(scenario: &Scenario, out: &Path, options: RunOptions) -> Result<Outcome> {
+    // Everything that can still refuse the scenario comes before the first write.
+    let controller = Controller::new(scenario)?;
     create_dir_all(out)?;
     let trace_path = out.join("trace.csv");
     let file = AtomicFile::create(&trace_path)?;
@@ -89,7 +91,6 @@ pub fn run_with(scenario: &Scenario, out: &Path, options: RunOptions) -> Result<
     if options.checkpoint_every.is_some() {
         recorder.keep_lines();
     }
-    let controller = Controller::new(scenario)?;
     finish(out, world, recorder, controller, options)
 }
 

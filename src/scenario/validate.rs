@@ -424,7 +424,7 @@ fn measurement(m: &MeasurementFile, dt: SimTime, duration: SimTime) -> Result<Si
     let path = "measurement.period";
     positive(path, secs)?;
     let period = time(path, secs)?;
-    if period.as_nanos() % dt.as_nanos() != 0 {
+    if period < dt || period.as_nanos() % dt.as_nanos() != 0 {
         return Err(Error::invalid(
             path,
             format!(

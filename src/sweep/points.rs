@@ -182,9 +182,18 @@ fn axis(k: usize, a: &AxisFile, earlier: &[Axis]) -> Result<Axis> {
                     format!("axis `{}` needs steps ≥ 1 (got {})", a.name, r.steps),
                 ));
             }
-            let steps = usize::try_from(r.steps).map_err(|_| {
-                Error::invalid(at("range.steps"), format!("too many steps ({})", r.steps))
-            })?;
+            let steps = usize::try_from(r.steps)
+                .ok()
+                .filter(|&n| n <= MAX_SWEEP_POINTS)
+                .ok_or_else(|| {
+                    Error::invalid(
+                        at("range.steps"),
+                        format!(
+                            "axis `{}` has {} steps; a sweep runs at most {MAX_SWEEP_POINTS} points",
+                            a.name, r.steps
+                        ),
+                    )
+                })?;
             range_values(r.from, r.to, steps)
                 .into_iter()
                 .map(|x| {
@@ -230,6 +239,10 @@ fn axis(k: usize, a: &AxisFile, earlier: &[Axis]) -> Result<Axis> {
     })
 }
 
+/// Most points one sweep file may define (each is a whole run with its own output
+/// directory).
+pub const MAX_SWEEP_POINTS: usize = 100_000;
+
 /// Checks a sweep file and lists its points, without reading the base scenario.
 ///
 /// Errors name the field: `name`, `axes[1].pointer`, `axes[0].values` (empty axis),
@@ -269,6 +282,22 @@ pub fn plan(file: &SweepFile) -> Result<Plan> {
         overrides.push((pointer, value.clone()));
     }
     let lens: Vec<usize> = axes.iter().map(|a| a.values.len()).collect();
+    let count = match file.combine {
+        Combine::Zip => lens[0],
+        Combine::Factorial => lens
+            .iter()
+            .try_fold(1usize, |n, &m| n.checked_mul(m))
+            .unwrap_or(usize::MAX),
+    };
+    if count > MAX_SWEEP_POINTS {
+        return Err(Error::invalid(
+            "axes",
+            format!(
+                "give {count} points; a sweep runs at most {MAX_SWEEP_POINTS} (split it into \
+                 several sweeps, or with --shard)"
+            ),
+        ));
+    }
     let points = match file.combine {
         Combine::Zip => {
             if let Some(k) = lens.iter().position(|&n| n != lens[0]) {

@@ -6,6 +6,7 @@ use std::process::{Command, Output};
 use serde_json::{json, Value};
 
 mod contract;
+mod limits;
 
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_dsmcosim"))

@@ -34,6 +34,10 @@ impl Jitter {
     }
 }
 
+/// Most slots one cycle may hold (sync, static and dynamic): every cycle is computed
+/// slot by slot, so the slot grid bounds the work and memory of each cycle.
+pub const MAX_SLOTS_PER_CYCLE: u64 = 100_000;
+
 /// A TDMA network: node 0 is the server, nodes `1..=clients` the clients (client `i`
 /// is partition node `i − 1`, see [`super::tdma_node`]).
 ///
@@ -147,6 +151,17 @@ impl TdmaConfig {
                 format!(
                     "{} is shorter than the sync and static part ({} slots of {})",
                     self.cycle, statics, self.slot
+                ),
+            ));
+        }
+        let slots = self.cycle.0 / self.slot.0;
+        if slots > MAX_SLOTS_PER_CYCLE {
+            return Err(TdmaError::config(
+                "cycle",
+                format!(
+                    "{} holds {slots} slots of {}; at most {MAX_SLOTS_PER_CYCLE} slots per \
+                     cycle are modelled (lengthen the slot or shorten the cycle)",
+                    self.cycle, self.slot
                 ),
             ));
         }

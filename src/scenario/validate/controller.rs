@@ -14,6 +14,10 @@ use crate::scenario::model::{ChannelSpec, ControllerSpec, Measure, Method, Probl
 /// run over the window.
 pub const MAX_GRID_POINTS: f64 = 40_000.0;
 
+/// Most reflections per DSM iteration (`m_r`; the thesis uses 5): each one is measured
+/// on a fork run over a whole window.
+pub const MAX_REFLECTIONS: usize = 1_000;
+
 fn method(m: MethodFile) -> Method {
     match m {
         MethodFile::Dsm => Method::Dsm,
@@ -173,10 +177,14 @@ pub(super) fn controller(
         }
     }
     let dsm_size = positive("controller.dsm.size", c.dsm.size)?;
-    if c.dsm.reflections == 0 {
+    if c.dsm.reflections == 0 || c.dsm.reflections > MAX_REFLECTIONS {
         return Err(Error::invalid(
             "controller.dsm.reflections",
-            "must be ≥ 1 (got 0)",
+            format!(
+                "must be from 1 to {MAX_REFLECTIONS} (got {}; each reflection is a fork run \
+                 over a whole window)",
+                c.dsm.reflections
+            ),
         ));
     }
     let live = method(c.method);

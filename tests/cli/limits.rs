@@ -1,0 +1,137 @@
+//! Inputs legal field by field whose sizes or times together are not (issue
+//! "Hardening"): each is refused at once by `validate` and by `run`, exit 2, the field
+//! named, nothing written — within a bounded time, so a hang fails the test instead of
+//! stalling CI.
+
+use std::path::Path;
+use std::process::{Output, Stdio};
+use std::time::{Duration, Instant};
+
+use serde_json::{json, Value};
+
+use super::{bin, said, scratch, shipped, write_json};
+
+/// Runs `dsmcosim args…`, killing it after `limit` (then the test fails).
+fn bounded(args: &[&str], limit: Duration) -> Output {
+    let mut child = bin()
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn dsmcosim");
+    let start = Instant::now();
+    while child.try_wait().expect("wait").is_none() {
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            panic!("dsmcosim {args:?} still running after {limit:?}");
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    child.wait_with_output().expect("output")
+}
+
+/// `validate` and `run` both exit 2 naming `field` (and `what`), and `run` writes
+/// nothing.
+fn refused(dir: &Path, name: &str, v: &Value, field: &str, what: &str) {
+    let file = write_json(dir, &format!("{name}.json"), v);
+    let out = dir.join(format!("{name}_out"));
+    let f = file.to_str().unwrap();
+    for args in [
+        vec!["validate", f],
+        vec!["run", f, "--out", out.to_str().unwrap()],
+    ] {
+        let o = bounded(&args, Duration::from_secs(20));
+        assert_eq!(o.status.code(), Some(2), "{name}: {args:?}: {}", said(&o));
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            err.contains(field) && err.contains(what),
+            "{name}: {}",
+            said(&o)
+        );
+        assert_eq!(err.lines().count(), 1, "{name}: one line: {err}");
+    }
+    assert!(!out.exists(), "{name}: run wrote {}", out.display());
+}
+
+#[test]
+fn sizes_and_times_legal_one_by_one_but_not_together_are_refused_at_once() {
+    let dir = scratch("limits");
+    let mut v = shipped("grid16_monolithic");
+    // A measurement period that rounds to 0 ns looped forever in `run`.
+    for period in [1e-10, 5e-324] {
+        v["measurement"] = json!({"period": period});
+        refused(
+            &dir,
+            "period",
+            &v,
+            "measurement.period",
+            "whole number of dt steps",
+        );
+    }
+    // 1 ns slots in a 1 s cycle: 10⁹ slots per cycle.
+    let mut t = shipped("tdma4_space_fixed");
+    t["network"]["slot"] = json!(1e-9);
+    t["network"]["cycle"] = json!(1.0);
+    t["network"].as_object_mut().unwrap().remove("guard");
+    refused(&dir, "slots", &t, "network.cycle", "at most 100000 slots");
+    // m_r near i64::MAX reflections per DSM iteration.
+    let mut c = shipped("grid16_space_cp");
+    c["controller"]["dsm"]["reflections"] = json!(9_223_372_036_854_775_807_u64);
+    refused(
+        &dir,
+        "reflections",
+        &c,
+        "controller.dsm.reflections",
+        "from 1 to 1000",
+    );
+    // A simplex larger than the delay box: `validate` said ok, `run` refused.
+    let mut c = shipped("grid16_space_cp");
+    c["controller"]["dsm"]["size"] = json!(0.2);
+    c["controller"]
+        .as_object_mut()
+        .unwrap()
+        .remove("surface_window");
+    c["controller"].as_object_mut().unwrap().remove("landscape");
+    refused(
+        &dir,
+        "simplex",
+        &c,
+        "controller",
+        "cannot start the simplex",
+    );
+    // A grid search of 10⁹ points per window.
+    let mut c = shipped("grid16_space_cp");
+    c["controller"]["tau_max"] = json!(1e6);
+    refused(
+        &dir,
+        "grid",
+        &c,
+        "controller.grid_step",
+        "at most 40000 points",
+    );
+}
+
+#[test]
+fn a_sweep_axis_of_a_billion_steps_is_refused_before_anything_is_allocated() {
+    let dir = scratch("limits-sweep");
+    write_json(&dir, "base.json", &shipped("grid16_monolithic"));
+    let sweep = json!({
+        "name": "huge", "base": "base.json",
+        "axes": [{"name": "k", "pointer": "/stabilizer/k",
+                  "range": {"from": 1.0, "to": 10.0, "steps": 1_000_000_000}}]
+    });
+    let file = write_json(&dir, "sweep.json", &sweep);
+    let out = dir.join("out");
+    let o = bounded(
+        &[
+            "sweep",
+            file.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        Duration::from_secs(20),
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", said(&o));
+    assert!(said(&o).contains("range.steps"), "{}", said(&o));
+    assert!(!out.exists(), "nothing written");
+}
