@@ -39,12 +39,20 @@ pub enum Command {
     },
     /// Run a scenario and write summary.json, trace.csv, epochs.csv, SVG plots and a copy
     /// of the scenario file (scenario.json).
+    ///
+    /// One run per output directory: a second run into a directory in use exits 1
+    /// naming the holder; a directory holding another scenario's run is refused (exit 2)
+    /// unless --force; the outputs and temporary files of earlier runs there are removed
+    /// first (checkpoints/ and other files are kept).
     Run {
         /// Scenario file (JSON).
         scenario: PathBuf,
         /// Output directory (created if missing; files in it are replaced atomically).
         #[arg(long)]
         out: PathBuf,
+        /// Replace another scenario's run in --out.
+        #[arg(long)]
+        force: bool,
         /// Write the complete run state into OUT/checkpoints/ every S seconds of
         /// simulated time (at the next window boundary for controlled runs).
         #[arg(long, value_name = "S")]
@@ -55,9 +63,12 @@ pub enum Command {
     Resume {
         /// A checkpoint file written by `run --checkpoint-every`.
         checkpoint: PathBuf,
-        /// Output directory.
+        /// Output directory (claimed as by `run`).
         #[arg(long)]
         out: PathBuf,
+        /// Replace another scenario's run in --out.
+        #[arg(long)]
+        force: bool,
         /// Keep writing checkpoints every S seconds of simulated time.
         #[arg(long, value_name = "S")]
         checkpoint_every: Option<f64>,
@@ -210,7 +221,10 @@ pub fn main() -> ExitCode {
 }
 
 /// The run options from the command line.
-fn run_options(checkpoint_every: Option<f64>) -> crate::Result<crate::run::RunOptions> {
+fn run_options(
+    checkpoint_every: Option<f64>,
+    force: bool,
+) -> crate::Result<crate::run::RunOptions> {
     let checkpoint_every = match checkpoint_every {
         None => None,
         Some(secs) => match crate::kernel::SimTime::from_secs_f64(secs) {
@@ -223,7 +237,10 @@ fn run_options(checkpoint_every: Option<f64>) -> crate::Result<crate::run::RunOp
             }
         },
     };
-    Ok(crate::run::RunOptions { checkpoint_every })
+    Ok(crate::run::RunOptions {
+        checkpoint_every,
+        force,
+    })
 }
 
 fn report(name: &str, outcome: &crate::run::Outcome, out: &std::path::Path) {
@@ -263,9 +280,10 @@ pub fn execute(command: Command) -> crate::Result<()> {
         Command::Run {
             scenario,
             out,
+            force,
             checkpoint_every,
         } => {
-            let options = run_options(checkpoint_every)?;
+            let options = run_options(checkpoint_every, force)?;
             let s = scenario::load(&scenario)?;
             let result = crate::run::run_with(&s, &out, options);
             // The run directory keeps the file it ran (also beside a diverged run's
@@ -281,9 +299,10 @@ pub fn execute(command: Command) -> crate::Result<()> {
         Command::Resume {
             checkpoint,
             out,
+            force,
             checkpoint_every,
         } => {
-            let options = run_options(checkpoint_every)?;
+            let options = run_options(checkpoint_every, force)?;
             let outcome = crate::run::resume(&checkpoint, &out, options)?;
             report(&checkpoint.display().to_string(), &outcome, &out);
             Ok(())

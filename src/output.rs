@@ -16,6 +16,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::error::{Error, Result};
 
+pub mod run_dir;
+
 /// Writes `bytes` to `path` atomically: the file either keeps its old content (or stays
 /// absent) or has exactly `bytes`, never a mix.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {

@@ -15,7 +15,8 @@ use crate::control::experiment::{Controller, Experiment};
 use crate::cosim::CoSim;
 use crate::error::{Error, Result};
 use crate::kernel::SimTime;
-use crate::output::{create_dir_all, write_atomic, AtomicFile};
+use crate::output::run_dir::claim;
+use crate::output::{write_atomic, AtomicFile};
 use crate::report::{write_line_plot, LinePlot, Scale, Series};
 use crate::scenario::model::{Scenario, Solver, Stabilizer};
 use crate::trace::{NetworkLog, Recorder};
@@ -51,6 +52,9 @@ pub struct RunOptions {
     /// Write a checkpoint into `OUT/checkpoints/` every this much simulated time (at the
     /// first window boundary at or after each multiple, for controlled runs).
     pub checkpoint_every: Option<SimTime>,
+    /// Replace another scenario's run in the output directory
+    /// ([`crate::output::run_dir::claim`]).
+    pub force: bool,
 }
 
 /// Runs `scenario` and writes its outputs into `out`.
@@ -62,7 +66,7 @@ pub fn run(scenario: &Scenario, out: &Path) -> Result<Outcome> {
 pub fn run_with(scenario: &Scenario, out: &Path, options: RunOptions) -> Result<Outcome> {
     // Everything that can still refuse the scenario comes before the first write.
     let controller = Controller::new(scenario)?;
-    create_dir_all(out)?;
+    let _dir = claim(out, &scenario.name, options.force)?;
     let trace_path = out.join("trace.csv");
     let file = AtomicFile::create(&trace_path)?;
     let ids: Vec<u32> = scenario.bodies.iter().map(|b| b.id).collect();
@@ -98,7 +102,7 @@ pub fn run_with(scenario: &Scenario, out: &Path, options: RunOptions) -> Result<
 /// (the trace from t = 0: the checkpoint carries the lines written before it).
 pub fn resume(path: &Path, out: &Path, options: RunOptions) -> Result<Outcome> {
     let cp = crate::checkpoint::read(path)?;
-    create_dir_all(out)?;
+    let _dir = claim(out, &cp.world.scenario().name, options.force)?;
     let trace_path = out.join("trace.csv");
     let mut recorder = cp.recorder;
     recorder

@@ -226,7 +226,7 @@ pub fn command_stability_map(path: &Path, out: &Path, duration: Option<f64>) -> 
 /// was validated from).
 pub fn study(json: &Value, scenario: &Scenario, options: Options) -> Result<Study> {
     let base_dt = scenario.dt.as_nanos();
-    if base_dt % (REFERENCE_DIVISOR * 2) != 0 {
+    if !base_dt.is_multiple_of(REFERENCE_DIVISOR * 2) {
         return Err(Error::invalid(
             "dt",
             format!(

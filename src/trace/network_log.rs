@@ -110,7 +110,7 @@ impl NetworkLog {
         self.frames += report.frames.len() as u64;
         self.lost += lost as u64;
         self.keep_for_timeline(report, lost > 0);
-        let every = report.cycle % self.decimation == 0 || report.switch.is_some();
+        let every = report.cycle.is_multiple_of(self.decimation) || report.switch.is_some();
         let mut text = String::new();
         for f in &report.frames {
             if every || f.lost() {

@@ -109,7 +109,7 @@ impl Recorder {
             d.values(v.as_slice());
         }
         d.end_step();
-        if s.step % self.decimation != 0 && !s.last {
+        if !s.step.is_multiple_of(self.decimation) && !s.last {
             return Ok(());
         }
         self.rows += 1;

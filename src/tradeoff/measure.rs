@@ -126,7 +126,7 @@ struct Sampler<'a> {
 
 impl Observer for Sampler<'_> {
     fn on_step(&mut self, s: &StepValues) -> std::io::Result<()> {
-        if s.time.as_nanos() % self.every == 0 {
+        if s.time.as_nanos().is_multiple_of(self.every) {
             self.samples.extend_from_slice(s.p);
         }
         self.counter.add(1);

@@ -36,6 +36,7 @@ fn check_resume(name: &str, v: &Value, every: f64, expected_checkpoints: usize) 
     let s = parse_str(&v.to_string(), name).expect("scenario");
     let opts = RunOptions {
         checkpoint_every: SimTime::from_secs_f64(every),
+        ..RunOptions::default()
     };
     let full = run_with(&s, &dir.join("full"), opts);
     let plain = run_with(&s, &dir.join("plain"), RunOptions::default());
@@ -172,6 +173,7 @@ fn bad_checkpoints_are_clear_errors() {
         &dir.join("full"),
         RunOptions {
             checkpoint_every: SimTime::from_secs_f64(0.5),
+            ..RunOptions::default()
         },
     )
     .unwrap();

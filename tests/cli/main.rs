@@ -188,10 +188,13 @@ fn run_writes_the_output_contract_and_is_deterministic() {
         assert!(svg.contains(x_label), "{file} labels its time axis");
         assert!(svg.contains(y_label), "{file} gives the unit of its values");
     }
-    // No temporary files are left behind.
+    // No temporary files are left behind (the hidden lock file stays, by design).
     for e in std::fs::read_dir(&a).unwrap() {
         let name = e.unwrap().file_name().into_string().unwrap();
-        assert!(!name.starts_with('.'), "leftover {name}");
+        assert!(
+            !name.starts_with('.') || name == ".dsmcosim.lock",
+            "leftover {name}"
+        );
     }
 }
 
@@ -485,4 +488,64 @@ fn distance_measures_how_far_runs_drift_from_a_reference() {
     let o = call(args("1", &[&short]));
     assert_eq!(o.status.code(), Some(2), "{}", said(&o));
     assert!(said(&o).contains("not traced at the times"), "{}", said(&o));
+}
+
+#[test]
+fn an_output_directory_belongs_to_one_run() {
+    let dir = scratch("run-dir");
+    let out = dir.join("out");
+    let o_str = out.to_str().unwrap().to_string();
+    // A TDMA run leaves network.csv; a stale temporary file of a killed run is there too.
+    let mut tdma = shipped("tdma4_space_fixed");
+    tdma["duration"] = json!(0.2);
+    tdma["measurement"] = json!({"period": 0.1});
+    let first = write_json(&dir, "tdma.json", &tdma);
+    let o = run(&["run", first.to_str().unwrap(), "--out", &o_str]);
+    assert!(o.status.success(), "{}", said(&o));
+    assert!(out.join("network.csv").is_file());
+    std::fs::write(out.join(".trace.csv.tmp.99999.3"), "half a trace").unwrap();
+    std::fs::write(out.join("notes.txt"), "the user's own file").unwrap();
+    // Another scenario into that directory: refused, nothing touched.
+    let other = write_json(&dir, "grid.json", &short_grid());
+    let o = run(&["run", other.to_str().unwrap(), "--out", &o_str]);
+    assert_eq!(o.status.code(), Some(2), "{}", said(&o));
+    assert!(said(&o).contains("--force"), "{}", said(&o));
+    assert!(out.join("network.csv").is_file() && out.join(".trace.csv.tmp.99999.3").is_file());
+    // With --force it replaces that run: no network.csv of the old one, no stale
+    // temporary file; the user's file stays.
+    let o = run(&["run", other.to_str().unwrap(), "--out", &o_str, "--force"]);
+    assert!(o.status.success(), "{}", said(&o));
+    assert!(
+        !out.join("network.csv").exists(),
+        "the old run's network.csv is gone"
+    );
+    assert!(
+        !out.join(".trace.csv.tmp.99999.3").exists(),
+        "stale temporary file removed"
+    );
+    assert!(
+        out.join("notes.txt").is_file(),
+        "files a run does not write are kept"
+    );
+    assert_eq!(summary(&out)["scenario"], json!("short_grid"));
+    // The same scenario again needs no --force.
+    let o = run(&["run", other.to_str().unwrap(), "--out", &o_str]);
+    assert!(o.status.success(), "{}", said(&o));
+    // While another process holds the directory's lock, a run exits 1 naming it.
+    let lock = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .open(out.join(".dsmcosim.lock"))
+        .expect("the run left its lock file");
+    lock.try_lock().expect("no run holds it now");
+    let o = run(&["run", other.to_str().unwrap(), "--out", &o_str]);
+    assert_eq!(o.status.code(), Some(1), "{}", said(&o));
+    assert!(
+        said(&o).contains("in use by another dsmcosim run"),
+        "{}",
+        said(&o)
+    );
+    drop(lock);
+    let o = run(&["run", other.to_str().unwrap(), "--out", &o_str]);
+    assert!(o.status.success(), "released: {}", said(&o));
 }

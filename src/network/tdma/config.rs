@@ -165,7 +165,7 @@ impl TdmaConfig {
                 ),
             ));
         }
-        if self.cycle.0 % self.slot.0 != 0 {
+        if !self.cycle.0.is_multiple_of(self.slot.0) {
             return Err(TdmaError::config(
                 "cycle",
                 format!(
