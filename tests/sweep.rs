@@ -191,6 +191,23 @@ fn sharded_and_merged_equals_unsharded() {
     assert_same_outputs(&full, &merged, "unsharded vs shards 1/2 + 2/2 merged");
     assert_eq!(read(&merged.join("timing.csv")).lines().count(), 7);
 
+    // A done.json edited after its run (here its mean cost) no longer matches the run's
+    // summary.json: refused, naming the file.
+    let done = s2.join("points/p1/done.json");
+    let text = read(&done);
+    let mut v: Value = serde_json::from_str(&text).unwrap();
+    let cost = v["row"]["mean_cost"].as_f64().expect("a mean cost");
+    v["row"]["mean_cost"] = json!(cost * 0.5);
+    std::fs::write(&done, serde_json::to_string(&v).unwrap()).unwrap();
+    let out = dsmcosim(&[Path::new("sweep-merge"), &dir.join("m1"), &s1, &s2]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("p1/done.json") && err.contains("does not match"),
+        "{err}"
+    );
+    std::fs::write(&done, text).unwrap();
+
     // The same shard twice, and shards of another sweep, are refused.
     let out = dsmcosim(&[Path::new("sweep-merge"), &dir.join("m2"), &s1, &s2, &full]);
     let err = String::from_utf8_lossy(&out.stderr);

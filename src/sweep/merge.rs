@@ -9,7 +9,7 @@ use serde_json::Value;
 
 use super::file;
 use super::points::plan;
-use super::record::{Record, DONE};
+use super::record::{Record, Row, DONE};
 use crate::error::{Error, Result};
 use crate::output::{create_dir_all, write_atomic};
 
@@ -118,6 +118,26 @@ pub fn merge(out: &Path, shards: &[PathBuf]) -> Result<MergeReport> {
                     format!(
                         "its axis values differ from the sweep definition's point p{index} ({})",
                         plan.describe(index)
+                    ),
+                ));
+            }
+            // done.json is a copy of its run's summary.json row: they must agree, so an
+            // edited or stale done.json is not merged as a result.
+            let summary_path = path.join("summary.json");
+            let summary: Value = std::fs::read_to_string(&summary_path)
+                .map_err(|e| e.to_string())
+                .and_then(|t| serde_json::from_str(&t).map_err(|e| e.to_string()))
+                .map_err(|e| {
+                    Error::invalid(&at, format!("its run's summary.json cannot be read: {e}"))
+                })?;
+            let row = Row::from_summary(&summary, &summary_path)?;
+            if row != record.row {
+                return Err(Error::invalid(
+                    at,
+                    format!(
+                        "does not match its run's summary.json (digest {} vs {}, mean cost \
+                         {:?} vs {:?}): rerun the point with --resume after removing done.json",
+                        record.row.digest, row.digest, record.row.mean_cost, row.mean_cost
                     ),
                 ));
             }
