@@ -5,6 +5,7 @@
 pub mod compare;
 pub mod digest;
 pub mod network_log;
+pub mod plot_samples;
 pub mod recorder;
 
 pub use digest::Digest;

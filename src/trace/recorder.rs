@@ -10,6 +10,7 @@ use crate::output::AtomicFile;
 use crate::report::Series;
 
 use super::network_log::NetworkLog;
+use super::plot_samples::PlotSamples;
 use super::Digest;
 use crate::network::tdma::CycleReport;
 
@@ -37,10 +38,9 @@ pub struct Recorder {
     /// beside them.
     dynamics: Digest,
     rows: u64,
-    times: Vec<f64>,
-    link_series: Vec<Vec<f64>>,
-    envelope: Vec<f64>,
-    body_series: Vec<[Vec<f64>; 3]>,
+    /// Per link (small models) then the envelope `max |w|` as peak series; x, y, z of
+    /// each plotted body as first series. Bounded in length whatever the horizon.
+    plots: PlotSamples,
     /// network.csv and the timeline cycles, on a TDMA scene.
     network: Option<NetworkLog>,
 }
@@ -67,15 +67,9 @@ impl Recorder {
             epochs: Digest::new(),
             dynamics: Digest::new(),
             rows: 0,
-            times: Vec::new(),
-            link_series: vec![Vec::new(); link_count.min(MAX_PLOTTED_LINKS + 1)],
-            envelope: Vec::new(),
-            body_series: vec![Default::default(); plot_bodies.len()],
+            plots: PlotSamples::new(plotted_links(link_count) + 1, 3 * plot_bodies.len()),
             network: None,
         };
-        if link_count > MAX_PLOTTED_LINKS {
-            r.link_series.clear();
-        }
         if let Some(f) = &mut r.file {
             let mut head = String::from("t");
             for k in 1..=link_count {
@@ -114,17 +108,14 @@ impl Recorder {
         }
         self.rows += 1;
         let t = s.time.as_secs_f64();
-        self.times.push(t);
-        for (series, &w) in self.link_series.iter_mut().zip(s.w) {
-            series.push(w);
-        }
-        self.envelope
-            .push(s.w.iter().fold(0.0, |m: f64, w| m.max(w.abs())));
-        for (series, &(i, _)) in self.body_series.iter_mut().zip(&self.plot_bodies) {
-            for (ax, series) in series.iter_mut().enumerate() {
-                series.push(s.p[i][ax]);
-            }
-        }
+        let envelope = s.w.iter().fold(0.0, |m: f64, w| m.max(w.abs()));
+        let links = s.w[..plotted_links(self.link_count)].iter().copied();
+        let bodies = self
+            .plot_bodies
+            .iter()
+            .flat_map(|&(i, _)| (0..3).map(move |ax| s.p[i][ax]));
+        self.plots
+            .push(t, links.chain(std::iter::once(envelope)), bodies);
         let Some(file) = &mut self.file else {
             return Ok(());
         };
@@ -216,25 +207,28 @@ impl Recorder {
 
     /// Series for the constraint plot: one per link (small models) or the envelope.
     pub fn constraint_series(&self) -> Vec<Series> {
-        if self.link_series.is_empty() {
+        let p = &self.plots;
+        let links = plotted_links(self.link_count);
+        if links == 0 {
             return vec![Series::new(
                 format!("max over {} links of |w|", self.link_count),
-                zip(&self.times, &self.envelope),
+                zip(&p.times, &p.peaks[0]),
             )];
         }
-        self.link_series
+        p.peaks[..links]
             .iter()
             .enumerate()
-            .map(|(k, s)| Series::new(format!("L{}", k + 1), zip(&self.times, s)))
+            .map(|(k, s)| Series::new(format!("L{}", k + 1), zip(&p.times, s)))
             .collect()
     }
 
     /// Series for the body-coordinate plot: x, y, z of each plotted body.
     pub fn body_series(&self) -> Vec<Series> {
         let mut out = Vec::new();
-        for (series, &(_, id)) in self.body_series.iter().zip(&self.plot_bodies) {
+        let p = &self.plots;
+        for (series, &(_, id)) in p.firsts.chunks(3).zip(&self.plot_bodies) {
             for (ax, s) in ["x", "y", "z"].iter().zip(series) {
-                out.push(Series::new(format!("{ax} of B{id}"), zip(&self.times, s)));
+                out.push(Series::new(format!("{ax} of B{id}"), zip(&p.times, s)));
             }
         }
         out
@@ -294,6 +288,16 @@ impl Observer for Recorder {
         }
         d.count(w.dsm_path.len() as u64);
         d.end_step();
+    }
+}
+
+/// Links with their own series in the constraint plot (none on larger models, which
+/// plot the envelope only).
+fn plotted_links(link_count: usize) -> usize {
+    if link_count > MAX_PLOTTED_LINKS {
+        0
+    } else {
+        link_count
     }
 }
 
