@@ -32,10 +32,15 @@ pub struct Cli {
 /// The subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Check a scenario file and print what it describes; writes nothing.
+    /// Check a scenario file and print what it describes and what a run of it will
+    /// cost (steps, trace rows and bytes); writes nothing. Refuses (exit 2) what `run`
+    /// would refuse, the limits included.
     Validate {
         /// Scenario file (JSON).
         scenario: PathBuf,
+        /// Limits checked before the run starts.
+        #[command(flatten)]
+        limits: LimitArgs,
     },
     /// Run a scenario and write summary.json, trace.csv, epochs.csv, SVG plots and a copy
     /// of the scenario file (scenario.json).
@@ -53,6 +58,9 @@ pub enum Command {
         /// Replace another scenario's run in --out.
         #[arg(long)]
         force: bool,
+        /// Limits checked before the run starts.
+        #[command(flatten)]
+        limits: LimitArgs,
         /// Write the complete run state into OUT/checkpoints/ every S seconds of
         /// simulated time (at the next window boundary for controlled runs).
         #[arg(long, value_name = "S")]
@@ -69,6 +77,9 @@ pub enum Command {
         /// Replace another scenario's run in --out.
         #[arg(long)]
         force: bool,
+        /// Limits checked before the run starts.
+        #[command(flatten)]
+        limits: LimitArgs,
         /// Keep writing checkpoints every S seconds of simulated time.
         #[arg(long, value_name = "S")]
         checkpoint_every: Option<f64>,
@@ -220,10 +231,35 @@ pub fn main() -> ExitCode {
     }
 }
 
+/// Limits a run is checked against before it starts (`crate::run::budget`).
+#[derive(Debug, Clone, Copy, clap::Args)]
+pub struct LimitArgs {
+    /// Most integration steps of the run.
+    #[arg(long, value_name = "N", default_value_t = crate::run::budget::DEFAULT_MAX_STEPS)]
+    max_steps: u64,
+    /// Most bytes trace.csv may take (estimated before the run).
+    #[arg(long, value_name = "BYTES", default_value_t = crate::run::budget::DEFAULT_MAX_OUTPUT_BYTES)]
+    max_output: u64,
+    /// Most checkpoints the run may write.
+    #[arg(long, value_name = "N", default_value_t = crate::run::budget::DEFAULT_MAX_CHECKPOINTS)]
+    max_checkpoints: u64,
+}
+
+impl LimitArgs {
+    fn limits(&self) -> crate::run::budget::Limits {
+        crate::run::budget::Limits {
+            max_steps: self.max_steps,
+            max_output_bytes: self.max_output,
+            max_checkpoints: self.max_checkpoints,
+        }
+    }
+}
+
 /// The run options from the command line.
 fn run_options(
     checkpoint_every: Option<f64>,
     force: bool,
+    limits: LimitArgs,
 ) -> crate::Result<crate::run::RunOptions> {
     let checkpoint_every = match checkpoint_every {
         None => None,
@@ -240,6 +276,7 @@ fn run_options(
     Ok(crate::run::RunOptions {
         checkpoint_every,
         force,
+        limits: limits.limits(),
     })
 }
 
@@ -259,8 +296,10 @@ fn report(name: &str, outcome: &crate::run::Outcome, out: &std::path::Path) {
 /// Runs one subcommand.
 pub fn execute(command: Command) -> crate::Result<()> {
     match command {
-        Command::Validate { scenario } => {
+        Command::Validate { scenario, limits } => {
             let s = scenario::load(&scenario)?;
+            let estimate = crate::run::budget::Estimate::of(&s, None);
+            estimate.check(&limits.limits())?;
             // Everything `run` builds before its first step that can still refuse the
             // scenario: the controller's simplex must fit the feasible set.
             crate::control::experiment::Controller::new(&s)?;
@@ -275,15 +314,22 @@ pub fn execute(command: Command) -> crate::Result<()> {
                 s.body_model.name(),
                 s.integrator.name()
             );
+            say!(
+                "a run writes {} trace rows of {} values (trace.csv at most {} bytes)",
+                estimate.trace_rows,
+                estimate.trace_columns,
+                estimate.trace_bytes
+            );
             Ok(())
         }
         Command::Run {
             scenario,
             out,
             force,
+            limits,
             checkpoint_every,
         } => {
-            let options = run_options(checkpoint_every, force)?;
+            let options = run_options(checkpoint_every, force, limits)?;
             let s = scenario::load(&scenario)?;
             let result = crate::run::run_with(&s, &out, options);
             // The run directory keeps the file it ran (also beside a diverged run's
@@ -300,9 +346,10 @@ pub fn execute(command: Command) -> crate::Result<()> {
             checkpoint,
             out,
             force,
+            limits,
             checkpoint_every,
         } => {
-            let options = run_options(checkpoint_every, force)?;
+            let options = run_options(checkpoint_every, force, limits)?;
             let outcome = crate::run::resume(&checkpoint, &out, options)?;
             report(&checkpoint.display().to_string(), &outcome, &out);
             Ok(())

@@ -21,6 +21,7 @@ use crate::report::{write_line_plot, LinePlot, Scale, Series};
 use crate::scenario::model::{Scenario, Solver, Stabilizer};
 use crate::trace::{NetworkLog, Recorder};
 
+pub mod budget;
 mod controlled;
 mod landscape;
 mod network;
@@ -55,6 +56,8 @@ pub struct RunOptions {
     /// Replace another scenario's run in the output directory
     /// ([`crate::output::run_dir::claim`]).
     pub force: bool,
+    /// Bounds on steps, output and checkpoints ([`budget`]).
+    pub limits: budget::Limits,
 }
 
 /// Runs `scenario` and writes its outputs into `out`.
@@ -65,6 +68,7 @@ pub fn run(scenario: &Scenario, out: &Path) -> Result<Outcome> {
 /// Runs `scenario` with `options` and writes its outputs into `out`.
 pub fn run_with(scenario: &Scenario, out: &Path, options: RunOptions) -> Result<Outcome> {
     // Everything that can still refuse the scenario comes before the first write.
+    budget::Estimate::of(scenario, options.checkpoint_every).check(&options.limits)?;
     let controller = Controller::new(scenario)?;
     let _dir = claim(out, &scenario.name, options.force)?;
     let trace_path = out.join("trace.csv");
@@ -102,6 +106,7 @@ pub fn run_with(scenario: &Scenario, out: &Path, options: RunOptions) -> Result<
 /// (the trace from t = 0: the checkpoint carries the lines written before it).
 pub fn resume(path: &Path, out: &Path, options: RunOptions) -> Result<Outcome> {
     let cp = crate::checkpoint::read(path)?;
+    budget::Estimate::of(cp.world.scenario(), options.checkpoint_every).check(&options.limits)?;
     let _dir = claim(out, &cp.world.scenario().name, options.force)?;
     let trace_path = out.join("trace.csv");
     let mut recorder = cp.recorder;

@@ -135,3 +135,52 @@ fn a_sweep_axis_of_a_billion_steps_is_refused_before_anything_is_allocated() {
     assert!(said(&o).contains("range.steps"), "{}", said(&o));
     assert!(!out.exists(), "nothing written");
 }
+
+#[test]
+fn runs_beyond_the_step_output_and_checkpoint_limits_are_refused_unless_lifted() {
+    let dir = scratch("limits-budget");
+    let mut v = shipped("grid16_monolithic");
+    // 10¹¹ steps.
+    v["duration"] = json!(1e8);
+    v["forces"] = json!([]);
+    refused(&dir, "steps", &v, "duration", "--max-steps");
+    let file = write_json(&dir, "steps.json", &v);
+    let o = bounded(
+        &[
+            "validate",
+            file.to_str().unwrap(),
+            "--max-steps",
+            "200000000000",
+            "--max-output",
+            "1000000000000000000",
+        ],
+        Duration::from_secs(20),
+    );
+    assert!(o.status.success(), "lifted: {}", said(&o));
+    assert!(said(&o).contains("1000000001 trace rows"), "{}", said(&o));
+    // 10⁹ steps at decimation 1: terabytes of trace.
+    v["duration"] = json!(1e6);
+    v["output"]["decimation"] = json!(1);
+    refused(&dir, "output", &v, "output.decimation", "--max-output");
+    // A checkpoint every step of a 30 s run.
+    let file = write_json(&dir, "mono.json", &shipped("grid16_monolithic"));
+    let out = dir.join("ckpt_out");
+    let o = bounded(
+        &[
+            "run",
+            file.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--checkpoint-every",
+            "0.001",
+        ],
+        Duration::from_secs(20),
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", said(&o));
+    assert!(
+        said(&o).contains("--checkpoint-every") && said(&o).contains("30000 checkpoints"),
+        "{}",
+        said(&o)
+    );
+    assert!(!out.exists(), "nothing written");
+}

@@ -1,0 +1,182 @@
+//! What a run will cost before it starts: steps, trace rows and bytes, checkpoints —
+//! estimated from the scenario alone and checked against limits that a flag lifts.
+//!
+//! The estimates are upper bounds: a trace value is at most [`BYTES_PER_VALUE`] bytes of
+//! text (Rust's shortest round-trip form of an `f64` with its comma), a row holds `t`,
+//! `w` and `f` of every link and six values per traced body.
+
+use crate::error::{Error, Result};
+use crate::kernel::SimTime;
+use crate::scenario::Scenario;
+
+/// Largest text of one trace value with its separator [bytes] (`-1.2345678901234567e-308,`).
+pub const BYTES_PER_VALUE: u64 = 25;
+/// Default bound on the integration steps of one run (`--max-steps` lifts it): 10¹⁰
+/// steps, hours of wall time even on the smallest scene.
+pub const DEFAULT_MAX_STEPS: u64 = 10_000_000_000;
+/// Default bound on the estimated trace.csv size [bytes] (`--max-output` lifts it):
+/// 10 GB.
+pub const DEFAULT_MAX_OUTPUT_BYTES: u64 = 10_000_000_000;
+/// Default bound on the checkpoints one run writes (`--max-checkpoints` lifts it).
+pub const DEFAULT_MAX_CHECKPOINTS: u64 = 1_000;
+
+/// Limits a run is checked against.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Limits {
+    /// Most integration steps.
+    pub max_steps: u64,
+    /// Most estimated trace.csv bytes.
+    pub max_output_bytes: u64,
+    /// Most checkpoints written.
+    pub max_checkpoints: u64,
+}
+
+impl Default for Limits {
+    fn default() -> Limits {
+        Limits {
+            max_steps: DEFAULT_MAX_STEPS,
+            max_output_bytes: DEFAULT_MAX_OUTPUT_BYTES,
+            max_checkpoints: DEFAULT_MAX_CHECKPOINTS,
+        }
+    }
+}
+
+/// What a run of a scenario will do and write, estimated before it starts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Estimate {
+    /// Integration steps.
+    pub steps: u64,
+    /// Rows of trace.csv (header excluded), exactly.
+    pub trace_rows: u64,
+    /// Values per trace row.
+    pub trace_columns: u64,
+    /// Upper bound on trace.csv [bytes].
+    pub trace_bytes: u64,
+    /// Checkpoints written (with `--checkpoint-every`).
+    pub checkpoints: u64,
+}
+
+impl Estimate {
+    /// The estimate for `scenario`, with checkpoints every `checkpoint_every`.
+    pub fn of(scenario: &Scenario, checkpoint_every: Option<SimTime>) -> Estimate {
+        let steps = scenario.steps;
+        let decimation = scenario.output.decimation.max(1);
+        // Every decimation-th step from step 0, and the last step always.
+        let trace_rows = steps / decimation + 1 + u64::from(!steps.is_multiple_of(decimation));
+        let trace_columns =
+            1 + 2 * scenario.links.len() as u64 + 6 * scenario.output.trace_bodies.len() as u64;
+        let trace_bytes = trace_rows
+            .saturating_mul(trace_columns)
+            .saturating_mul(BYTES_PER_VALUE);
+        let checkpoints = checkpoint_every
+            .filter(|e| e.0 > 0)
+            .map_or(0, |e| scenario.duration.0 / e.0);
+        Estimate {
+            steps,
+            trace_rows,
+            trace_columns,
+            trace_bytes,
+            checkpoints,
+        }
+    }
+
+    /// Checks the estimate against `limits`; the error names the fields and the flag.
+    pub fn check(&self, limits: &Limits) -> Result<()> {
+        if self.steps > limits.max_steps {
+            return Err(Error::invalid(
+                "duration",
+                format!(
+                    "duration / dt gives {} steps, above the limit of {} (raise it with \
+                     --max-steps, or shorten the run)",
+                    self.steps, limits.max_steps
+                ),
+            ));
+        }
+        if self.trace_bytes > limits.max_output_bytes {
+            return Err(Error::invalid(
+                "output.decimation",
+                format!(
+                    "trace.csv would hold up to {} bytes ({} rows × {} values), above the \
+                     limit of {} bytes (raise output.decimation, trace fewer bodies, or \
+                     --max-output)",
+                    self.trace_bytes, self.trace_rows, self.trace_columns, limits.max_output_bytes
+                ),
+            ));
+        }
+        if self.checkpoints > limits.max_checkpoints {
+            return Err(Error::invalid(
+                "--checkpoint-every",
+                format!(
+                    "gives {} checkpoints, above the limit of {} (checkpoint less often, or \
+                     --max-checkpoints)",
+                    self.checkpoints, limits.max_checkpoints
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scene(duration: f64, decimation: u64) -> Scenario {
+        let text = format!(
+            r#"{{"name": "b", "seed": 1, "duration": {duration}, "dt": 0.001,
+                "model": {{"grid": {{"rows": 2, "cols": 3, "spacing": 1.0, "mass": 1.0, "size": 0.1}}}},
+                "output": {{"decimation": {decimation}}}}}"#
+        );
+        crate::scenario::parse_str(&text, "b").expect("valid")
+    }
+
+    #[test]
+    fn rows_and_columns_are_those_a_run_writes() {
+        // 1.234 s = 1234 steps; every 100th from 0 (13 rows) and the last one.
+        let e = Estimate::of(&scene(1.234, 100), None);
+        assert_eq!((e.steps, e.trace_rows), (1234, 14));
+        // t, w and f of 7 links, 6 values of each of 6 bodies.
+        assert_eq!(e.trace_columns, 1 + 14 + 36);
+        let dir = std::env::temp_dir().join(format!("dsmcosim-budget-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        crate::run::run(&scene(1.234, 100), &dir).expect("runs");
+        let trace = std::fs::read_to_string(dir.join("trace.csv")).unwrap();
+        assert_eq!(
+            trace.lines().count() as u64,
+            e.trace_rows + 1,
+            "plus the header"
+        );
+        let values = trace.lines().nth(1).unwrap().split(',').count() as u64;
+        assert_eq!(values, e.trace_columns);
+        assert!(
+            trace.len() as u64 <= e.trace_bytes + 1000,
+            "the bound holds (header aside)"
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+        // A multiple of the decimation has no extra last row.
+        assert_eq!(Estimate::of(&scene(1.2, 100), None).trace_rows, 13);
+    }
+
+    #[test]
+    fn each_limit_names_its_field_and_flag() {
+        let e = Estimate::of(&scene(1.0, 1), SimTime::from_secs_f64(0.001));
+        let tight = |f: fn(&mut Limits)| {
+            let mut l = Limits::default();
+            f(&mut l);
+            e.check(&l).unwrap_err().to_string()
+        };
+        assert!(e.check(&Limits::default()).is_ok());
+        let m = tight(|l| l.max_steps = 999);
+        assert!(m.contains("duration") && m.contains("--max-steps"), "{m}");
+        let m = tight(|l| l.max_output_bytes = 1000);
+        assert!(
+            m.contains("output.decimation") && m.contains("--max-output"),
+            "{m}"
+        );
+        let m = tight(|l| l.max_checkpoints = 10);
+        assert!(
+            m.contains("--checkpoint-every") && m.contains("1000 checkpoints"),
+            "{m}"
+        );
+    }
+}
