@@ -1068,3 +1068,61 @@ fn tdma_configurations_are_checked() {
     let mono = remove_from_value(remove_from_value(mono, "/partition"), "/channels");
     invalid(mono.to_string(), "network.kind", "needs a `partition` section");
 }
+
+/// The thesis grid on 4 quadrant nodes over a TDMA network with `slot` and `cycle` [s].
+fn tdma_with(slot: f64, cycle: f64) -> Value {
+    let mut v = part_base();
+    v["network"] = json!({"kind": "tdma", "slot": slot, "cycle": cycle});
+    v["channels"][0].as_object_mut().unwrap().remove("latency");
+    v
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// Times near and below the nanosecond grid, and products of legal values: every case
+    /// ends in well under a second with a clean verdict, never a panic, a hang or a huge
+    /// allocation (issue "Hardening").
+    #[test]
+    fn sizes_and_times_near_the_limits_give_a_verdict_at_once(
+        period_exp in -330i32..1,
+        slot_ns in 1u64..200_000,
+        slots in prop_oneof![1u64..200, 99_000u64..101_000, 1_000_000u64..1_000_000_000],
+        steps_exp in 0u32..8,
+        dsm_refl in prop_oneof![0u64..5, 999u64..1002, Just(u64::MAX / 2)],
+    ) {
+        let start = std::time::Instant::now();
+        // A measurement period of 10^e s: accepted only as a whole number of dt steps.
+        let mut v = serde_json::from_str::<Value>(&set("/measurement", json!({"period": 10f64.powi(period_exp)}))).unwrap();
+        v["duration"] = json!(1.0);
+        match parse_str(&v.to_string(), "p") {
+            Ok(s) => prop_assert!(s.measurement_period.as_nanos() >= s.dt.as_nanos()),
+            Err(e) => prop_assert!(e.to_string().contains("measurement.period"), "{e}"),
+        }
+        // A TDMA cycle of `slots` slots of `slot_ns`.
+        let slot = slot_ns as f64 * 1e-9;
+        let t = tdma_with(slot, slot * slots as f64);
+        match parse_str(&t.to_string(), "t") {
+            Ok(_) => prop_assert!(slots <= 100_000, "{slots} slots per cycle accepted"),
+            // The slot grid, or the channels that cannot be scheduled on it.
+            Err(e) => prop_assert!(
+                e.to_string().contains("network.") || e.to_string().contains("channels"),
+                "{e}"
+            ),
+        }
+        // 10^k seconds of 1 ms steps.
+        let mut d: Value = serde_json::from_str(&set("/duration", json!(10f64.powi(steps_exp as i32)))).unwrap();
+        d["measurement"] = json!({"period": 1.0});
+        let _ = parse_str(&d.to_string(), "d");
+        // m_r reflections.
+        let mut c = part_base();
+        c["controller"] = json!({"problem": "cp", "budget": 400, "tau_max": 0.05,
+                                 "dsm": {"size": 0.002, "reflections": dsm_refl}});
+        let in_range = (1..=1000).contains(&dsm_refl);
+        match parse_str(&c.to_string(), "c") {
+            Ok(s) => prop_assert!(in_range && s.controller.unwrap().reflections as u64 == dsm_refl),
+            Err(e) => prop_assert!(!in_range && e.to_string().contains("controller.dsm.reflections"), "{e}"),
+        }
+        prop_assert!(start.elapsed() < std::time::Duration::from_secs(2), "took {:?}", start.elapsed());
+    }
+}
