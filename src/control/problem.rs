@@ -157,24 +157,14 @@ impl Delays {
         }
     }
 
-    /// The budget line of a two-channel constrained problem: `τ_2` as a function of
-    /// `τ_1` [s] (`None` where the budget leaves nothing, or for any other problem).
-    pub fn budget_line(&self, tau1: f64) -> Option<f64> {
+    /// The budget line of a two-channel constrained problem: the delay [s] of the other
+    /// channel when channel `i` (0 or 1) runs at `tau` [s] and the two use the whole
+    /// budget (`None` where channel `i` alone uses it up, or for any other problem).
+    pub fn budget_partner(&self, i: usize, tau: f64) -> Option<f64> {
         match self.problem {
-            Problem::Constrained { budget } if self.k.len() == 2 => {
-                let left = budget - self.k[0] / tau1;
-                (left > 0.0).then(|| self.k[1] / left)
-            }
-            _ => None,
-        }
-    }
-
-    /// The budget line of a two-channel constrained problem as `τ_1` of `τ_2` [s].
-    pub fn budget_line_inverse(&self, tau2: f64) -> Option<f64> {
-        match self.problem {
-            Problem::Constrained { budget } if self.k.len() == 2 => {
-                let left = budget - self.k[1] / tau2;
-                (left > 0.0).then(|| self.k[0] / left)
+            Problem::Constrained { budget } if self.k.len() == 2 && i < 2 => {
+                let left = budget - self.k[i] / tau;
+                (left > 0.0).then(|| self.k[1 - i] / left)
             }
             _ => None,
         }
@@ -217,6 +207,16 @@ mod tests {
             tau_max: 0.05,
             dt: SimTime(1_000_000),
         }
+    }
+
+    #[test]
+    fn the_budget_line_runs_both_ways() {
+        let d = cp();
+        let t2 = d.budget_partner(0, 0.003).unwrap();
+        assert!((t2 - 0.015).abs() < 1e-12, "{t2}");
+        assert!((d.budget_partner(1, t2).unwrap() - 0.003).abs() < 1e-12);
+        assert_eq!(d.budget_partner(0, 0.0025), None, "τ1 alone uses 400 Hz");
+        assert_eq!(d.budget_partner(2, 0.003), None);
     }
 
     #[test]

@@ -147,16 +147,20 @@ fn check(map: &Heatmap, target: &Path) -> Result<()> {
     Ok(())
 }
 
+/// The points of an overlay with both coordinates finite.
+fn finite_points(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
+    points
+        .iter()
+        .copied()
+        .filter(|p| p.0.is_finite() && p.1.is_finite())
+        .collect()
+}
+
 fn render(map: &Heatmap, target: &Path) -> Result<String> {
     check(map, target)?;
     let err = plot_error(target);
     let (x_edges, y_edges) = (edges(map.x), edges(map.y));
-    let overlay: Vec<(f64, f64)> = map
-        .path_overlay
-        .iter()
-        .copied()
-        .filter(|p| p.0.is_finite() && p.1.is_finite())
-        .collect();
+    let overlay = finite_points(map.path_overlay);
     let x_axis = Axis::exact(
         Scale::Linear,
         x_edges.iter().copied().chain(overlay.iter().map(|p| p.0)),
@@ -219,12 +223,7 @@ fn render(map: &Heatmap, target: &Path) -> Result<String> {
             })
         });
         chart.draw_series(cells).map_err(&err)?;
-        let line: Vec<(f64, f64)> = map
-            .line_overlay
-            .iter()
-            .copied()
-            .filter(|p| p.0.is_finite() && p.1.is_finite())
-            .collect();
+        let line = finite_points(map.line_overlay);
         if !line.is_empty() {
             chart
                 .draw_series(std::iter::once(PathElement::new(

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use serde_json::{json, Value};
 
-use crate::control::experiment::{channel_names, Experiment};
+use crate::control::experiment::{channel_names, Candidate, Experiment};
 use crate::cosim::CoSim;
 use crate::error::Result;
 use crate::report::{write_heatmap, write_line_plot, Heatmap, LinePlot, Scale, Series};
@@ -182,6 +182,27 @@ pub(super) fn write_plots(out: &Path, world: &CoSim, exp: &Experiment) -> Result
     write_surface(out, world, exp, &names)
 }
 
+/// The cells of a heatmap over two-delay points: the distinct first and second delays
+/// [ms], ascending, and each cell's objective (`values[iy][ix]`; NaN where no point).
+pub(super) fn cells_ms(points: &[Candidate]) -> (Vec<f64>, Vec<f64>, Vec<Vec<f64>>) {
+    let axis = |k: usize| {
+        let mut v: Vec<f64> = points.iter().map(|c| c.x[k]).collect();
+        v.sort_by(f64::total_cmp);
+        v.dedup();
+        v
+    };
+    let (xs, ys) = (axis(0), axis(1));
+    let at = |axis: &[f64], x: f64| axis.binary_search_by(|v| v.total_cmp(&x)).ok();
+    let mut values = vec![vec![f64::NAN; xs.len()]; ys.len()];
+    for c in points {
+        if let (Some(ix), Some(iy)) = (at(&xs, c.x[0]), at(&ys, c.x[1])) {
+            values[iy][ix] = c.objective;
+        }
+    }
+    let ms = |v: Vec<f64>| v.into_iter().map(|x| x * 1e3).collect();
+    (ms(xs), ms(ys), values)
+}
+
 fn write_surface(out: &Path, world: &CoSim, exp: &Experiment, names: &[String]) -> Result<()> {
     let Some((t, grid)) = &exp.surface else {
         return Ok(());
@@ -241,20 +262,7 @@ fn write_surface(out: &Path, world: &CoSim, exp: &Experiment, names: &[String]) 
         return Ok(());
     }
     // 2-D: a heatmap over the grid axes; infeasible cells stay missing.
-    let mut xs: Vec<f64> = grid.iter().map(|c| c.x[0]).collect();
-    let mut ys: Vec<f64> = grid.iter().map(|c| c.x[1]).collect();
-    for v in [&mut xs, &mut ys] {
-        v.sort_by(f64::total_cmp);
-        v.dedup();
-    }
-    let mut values = vec![vec![f64::NAN; xs.len()]; ys.len()];
-    for c in grid {
-        let ix = xs.iter().position(|&x| x == c.x[0]);
-        let iy = ys.iter().position(|&y| y == c.x[1]);
-        if let (Some(ix), Some(iy)) = (ix, iy) {
-            values[iy][ix] = c.objective;
-        }
-    }
+    let (xs_ms, ys_ms, values) = cells_ms(grid);
     let overlay: Vec<(f64, f64)> = window
         .map(|w| {
             w.dsm_path
@@ -263,8 +271,6 @@ fn write_surface(out: &Path, world: &CoSim, exp: &Experiment, names: &[String]) 
                 .collect()
         })
         .unwrap_or_default();
-    let xs_ms: Vec<f64> = xs.iter().map(|x| x * 1e3).collect();
-    let ys_ms: Vec<f64> = ys.iter().map(|y| y * 1e3).collect();
     write_heatmap(
         &out.join("surface.svg"),
         &Heatmap {

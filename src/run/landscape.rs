@@ -67,20 +67,7 @@ pub(super) fn write(out: &Path, world: &CoSim, exp: &Experiment) -> Result<()> {
     }
     write_atomic(&out.join("landscape.csv"), csv.as_bytes())?;
 
-    let mut xs: Vec<f64> = points.iter().map(|c| c.x[0]).collect();
-    let mut ys: Vec<f64> = points.iter().map(|c| c.x[1]).collect();
-    for v in [&mut xs, &mut ys] {
-        v.sort_by(f64::total_cmp);
-        v.dedup();
-    }
-    let mut values = vec![vec![f64::NAN; xs.len()]; ys.len()];
-    for c in points {
-        let ix = xs.iter().position(|&x| x == c.x[0]);
-        let iy = ys.iter().position(|&y| y == c.x[1]);
-        if let (Some(ix), Some(iy)) = (ix, iy) {
-            values[iy][ix] = c.objective;
-        }
-    }
+    let (xs_ms, ys_ms, values) = super::controlled::cells_ms(points);
     let delays = Delays::new(spec, &world.scenario().channels, world.scenario().dt);
     let (lo, hi) = (spec.tau_min, spec.tau_max);
     // The budget line inside the square, sampled along both axes (it is steep at one
@@ -88,8 +75,8 @@ pub(super) fn write(out: &Path, world: &CoSim, exp: &Experiment) -> Result<()> {
     let samples = (0..=400).map(|i| lo + (hi - lo) * f64::from(i) / 400.0);
     let mut budget: Vec<(f64, f64)> = samples
         .clone()
-        .filter_map(|t1| Some((t1, delays.budget_line(t1)?)))
-        .chain(samples.filter_map(|t2| Some((delays.budget_line_inverse(t2)?, t2))))
+        .filter_map(|t1| Some((t1, delays.budget_partner(0, t1)?)))
+        .chain(samples.filter_map(|t2| Some((delays.budget_partner(1, t2)?, t2))))
         .filter(|&(t1, t2)| (lo..=hi).contains(&t1) && (lo..=hi).contains(&t2))
         .map(|(t1, t2)| (t1 * 1e3, t2 * 1e3))
         .collect();
@@ -106,8 +93,6 @@ pub(super) fn write(out: &Path, world: &CoSim, exp: &Experiment) -> Result<()> {
         .unwrap_or_default();
     let t0 = t.as_secs_f64();
     let t1 = window.map_or(t0, |w| w.t_end.as_secs_f64());
-    let xs_ms: Vec<f64> = xs.iter().map(|x| x * 1e3).collect();
-    let ys_ms: Vec<f64> = ys.iter().map(|y| y * 1e3).collect();
     let title = format!(
         "{} — window cost over [{t0}, {t1}) s",
         world.scenario().name

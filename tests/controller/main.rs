@@ -196,11 +196,15 @@ fn a_controller_needs_valid_settings() {
     parse_str(&v.to_string(), "t").expect("24 501 grid points on one delay are allowed");
 }
 
+/// A shipped scenario file as JSON, for a test to edit.
+fn shipped_json(name: &str) -> Value {
+    let path = format!("{}/scenarios/{name}.json", env!("CARGO_MANIFEST_DIR"));
+    serde_json::from_str(&std::fs::read_to_string(path).expect("scenario")).expect("json")
+}
+
 /// A shipped experiment, shortened to `duration` s, with only the listed baselines.
 fn shipped(name: &str, duration: f64, baselines: Value) -> Scenario {
-    let path = format!("{}/scenarios/{name}.json", env!("CARGO_MANIFEST_DIR"));
-    let mut v: Value =
-        serde_json::from_str(&std::fs::read_to_string(path).expect("scenario")).expect("json");
+    let mut v = shipped_json(name);
     v["duration"] = json!(duration);
     let c = v["controller"].as_object_mut().expect("controller");
     c.remove("surface_window");
@@ -265,11 +269,7 @@ fn the_landscape_covers_the_square_and_agrees_with_the_baselines_measured_beside
     // both channels. The landscape forks the same state as the baselines: its point at
     // equal delays (5, 5) ms is the no-optimization point and must cost exactly what the
     // no-optimization baseline measured.
-    let path = format!(
-        "{}/scenarios/grid16_space_cp.json",
-        env!("CARGO_MANIFEST_DIR")
-    );
-    let mut v: Value = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    let mut v = shipped_json("grid16_space_cp");
     v["duration"] = json!(3.0);
     let c = v["controller"].as_object_mut().expect("controller");
     c.insert("tau_max".into(), json!(0.02));
@@ -499,11 +499,7 @@ fn in_the_thesis_reading_the_near_borders_get_the_smaller_delay_and_follow_the_l
 fn in_the_thesis_reading_space_up_dsm_beats_its_four_neighbours() {
     // Thesis: on space UP the DSM beats {τ1 ± δ, τ2} and {τ1, τ2 ± δ}; in the thesis
     // reading all four, over the whole 30 s (under sample and hold three of four).
-    let path = format!(
-        "{}/scenarios/grid16_space_up.json",
-        env!("CARGO_MANIFEST_DIR")
-    );
-    let mut v: Value = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    let mut v = shipped_json("grid16_space_up");
     let c = v["controller"].as_object_mut().expect("controller");
     c.remove("surface_window");
     c.insert("baselines".into(), json!([]));
