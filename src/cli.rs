@@ -298,11 +298,9 @@ pub fn execute(command: Command) -> crate::Result<()> {
     match command {
         Command::Validate { scenario, limits } => {
             let s = scenario::load(&scenario)?;
+            let options = run_options(None, false, limits)?;
+            crate::run::preflight(&s, &options)?;
             let estimate = crate::run::budget::Estimate::of(&s, None);
-            estimate.check(&limits.limits())?;
-            // Everything `run` builds before its first step that can still refuse the
-            // scenario: the controller's simplex must fit the feasible set.
-            crate::control::experiment::Controller::new(&s)?;
             say!(
                 "{}: ok — {} bodies, {} links, {} forces, {} steps of {} s, {} path, {} integrator",
                 scenario.display(),

@@ -65,11 +65,18 @@ pub fn run(scenario: &Scenario, out: &Path) -> Result<Outcome> {
     run_with(scenario, out, RunOptions::default())
 }
 
+/// Everything a run checks and builds that can still refuse a validated scenario, before
+/// it writes anything: the cost estimate against the limits, and the controller (its
+/// simplex must fit the delay bounds). `validate` and a sweep's point check call it too,
+/// so they refuse exactly what `run` would.
+pub fn preflight(scenario: &Scenario, options: &RunOptions) -> Result<Option<Controller>> {
+    budget::Estimate::of(scenario, options.checkpoint_every).check(&options.limits)?;
+    Controller::new(scenario)
+}
+
 /// Runs `scenario` with `options` and writes its outputs into `out`.
 pub fn run_with(scenario: &Scenario, out: &Path, options: RunOptions) -> Result<Outcome> {
-    // Everything that can still refuse the scenario comes before the first write.
-    budget::Estimate::of(scenario, options.checkpoint_every).check(&options.limits)?;
-    let controller = Controller::new(scenario)?;
+    let controller = preflight(scenario, &options)?;
     let _dir = claim(out, &scenario.name, options.force)?;
     let trace_path = out.join("trace.csv");
     let file = AtomicFile::create(&trace_path)?;

@@ -428,7 +428,7 @@ pub fn expand(plan: &Plan, base: &Value, base_label: &str) -> Result<Vec<Point>>
     results.into_iter().collect()
 }
 
-/// Builds and validates point `i`.
+/// Builds and validates point `i`, with the checks `run` makes before it starts.
 fn point(plan: &Plan, base: &Value, base_seed: Option<u64>, i: usize) -> Result<Point> {
     let (doc, created) = build(plan, base, base_seed, i)?;
     let mut text = serde_json::to_string_pretty(&doc)
@@ -450,6 +450,10 @@ fn point(plan: &Plan, base: &Value, base_seed: Option<u64>, i: usize) -> Result<
                 format!("{e}{note}"),
             )
         })?;
+    // What `run` would still refuse (limits, a simplex that does not fit), before any
+    // point runs.
+    crate::run::preflight(&scenario, &crate::run::RunOptions::default())
+        .map_err(|e| Error::invalid(format!("point p{i} ({})", plan.describe(i)), e.to_string()))?;
     Ok(Point {
         index: i,
         values: plan.values(i),

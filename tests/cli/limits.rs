@@ -73,7 +73,7 @@ fn sizes_and_times_legal_one_by_one_but_not_together_are_refused_at_once() {
     t["network"]["slot"] = json!(1e-9);
     t["network"]["cycle"] = json!(1.0);
     t["network"].as_object_mut().unwrap().remove("guard");
-    refused(&dir, "slots", &t, "network.cycle", "at most 100000 slots");
+    refused(&dir, "slots", &t, "network.cycle", "at most 20000 slots");
     // m_r near i64::MAX reflections per DSM iteration.
     let mut c = shipped("grid16_space_cp");
     c["controller"]["dsm"]["reflections"] = json!(9_223_372_036_854_775_807_u64);
@@ -179,6 +179,41 @@ fn runs_beyond_the_step_output_and_checkpoint_limits_are_refused_unless_lifted()
     assert_eq!(o.status.code(), Some(2), "{}", said(&o));
     assert!(
         said(&o).contains("--checkpoint-every") && said(&o).contains("30000 checkpoints"),
+        "{}",
+        said(&o)
+    );
+    assert!(!out.exists(), "nothing written");
+}
+
+#[test]
+fn a_sweep_point_that_run_would_refuse_is_refused_before_any_point_runs() {
+    // D_s 2 ms fits the delay box, 200 ms does not: `run` refuses the second point, so
+    // the sweep refuses before running the first.
+    let dir = scratch("limits-sweep-point");
+    let mut base = shipped("grid16_space_cp");
+    base["duration"] = json!(2.0);
+    let c = base["controller"].as_object_mut().unwrap();
+    c.remove("surface_window");
+    c.remove("landscape");
+    write_json(&dir, "base.json", &base);
+    let sweep = json!({
+        "name": "ds", "base": "base.json",
+        "axes": [{"name": "D_s", "pointer": "/controller/dsm/size", "values": [0.002, 0.2]}]
+    });
+    let file = write_json(&dir, "sweep.json", &sweep);
+    let out = dir.join("out");
+    let o = bounded(
+        &[
+            "sweep",
+            file.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        Duration::from_secs(20),
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", said(&o));
+    assert!(
+        said(&o).contains("point p1") && said(&o).contains("cannot start the simplex"),
         "{}",
         said(&o)
     );
