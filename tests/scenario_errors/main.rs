@@ -1087,7 +1087,7 @@ proptest! {
     fn sizes_and_times_near_the_limits_give_a_verdict_at_once(
         period_exp in -330i32..1,
         slot_ns in 1u64..200_000,
-        slots in prop_oneof![1u64..200, 99_000u64..101_000, 1_000_000u64..1_000_000_000],
+        slots in prop_oneof![1u64..200, 19_000u64..21_000, 1_000_000u64..1_000_000_000],
         steps_exp in 0u32..8,
         dsm_refl in prop_oneof![0u64..5, 999u64..1002, Just(u64::MAX / 2)],
     ) {
@@ -1103,7 +1103,7 @@ proptest! {
         let slot = slot_ns as f64 * 1e-9;
         let t = tdma_with(slot, slot * slots as f64);
         match parse_str(&t.to_string(), "t") {
-            Ok(_) => prop_assert!(slots <= 100_000, "{slots} slots per cycle accepted"),
+            Ok(_) => prop_assert!(slots <= 20_000, "{slots} slots per cycle accepted"),
             // The slot grid, or the channels that cannot be scheduled on it.
             Err(e) => prop_assert!(
                 e.to_string().contains("network.") || e.to_string().contains("channels"),
