@@ -75,6 +75,7 @@ impl Drop for Scratch {
 fn bench_sweep(c: &mut Criterion) {
     let study = study();
     let options = Options {
+        keep: Default::default(),
         resume: false,
         shard: shard(),
     };

@@ -203,6 +203,11 @@ pub enum Command {
         /// directories with `dsmcosim sweep-merge`.
         #[arg(long, value_name = "i/n")]
         shard: Option<String>,
+        /// What each point keeps of its run: `summary` (scenario.json, summary.json,
+        /// epochs.csv, done.json), `trace` (also every CSV: trace.csv, network.csv, …) or
+        /// `all` (also the plots).
+        #[arg(long, value_enum, default_value = "all")]
+        keep: crate::sweep::Keep,
     },
     /// Join the output directories of a sharded sweep into OUT: checks that they hold
     /// the same sweep and every point exactly once, then writes sweep.csv, timing.csv
@@ -402,12 +407,18 @@ pub fn execute(command: Command) -> crate::Result<()> {
             out,
             resume,
             shard,
+            keep,
         } => {
             let shard = shard
                 .as_deref()
                 .map(crate::sweep::Shard::parse)
                 .transpose()?;
-            let r = crate::sweep::run(&sweep, &out, &crate::sweep::Options { resume, shard })?;
+            let options = crate::sweep::Options {
+                keep,
+                resume,
+                shard,
+            };
+            let r = crate::sweep::run(&sweep, &out, &options)?;
             say!(
                 "{}: {} of {} points ({} run, {} already done), {} diverged",
                 r.name,

@@ -9,7 +9,7 @@
 use std::path::Path;
 use std::time::Instant;
 
-use serde_json::json;
+use serde_json::{json, Value};
 
 use crate::control::experiment::{Controller, Experiment};
 use crate::cosim::CoSim;
@@ -152,9 +152,8 @@ fn finish(
         messages: world.messages(),
         events: world.events(),
     };
-    let error = result.as_ref().err().map(ToString::to_string);
     write_epochs(out, &world, &experiment)?;
-    write_summary(out, &world, &outcome, error.as_deref(), &experiment)?;
+    write_summary(out, &world, &outcome, result.as_ref().err(), &experiment)?;
     write_plots(out, &world, &recorder)?;
     network::write_plots(out, &world, &recorder)?;
     if world.scenario().controller.is_some() {
@@ -244,14 +243,35 @@ cost; then, on a controlled run, the bits of each objective, the grid optimum's 
 bits, the measurement count). dynamics_digest: the dynamics chain alone. See \
 dsmcosim::trace::digest";
 
+/// `divergence` in summary.json: where and when a run failed, as fields (the same as
+/// the `error` text).
+fn divergence(e: &Error) -> Value {
+    match e {
+        Error::Diverged(d) => {
+            let (link, body) = match d.place {
+                crate::error::Place::Link(k) => (Some(format!("L{k}")), None),
+                crate::error::Place::Body(id) => (None, Some(format!("B{id}"))),
+            };
+            json!({"time": d.time.as_secs_f64(), "node": d.node, "link": link, "body": body, "what": d.what})
+        }
+        Error::Numerical { time, message } => {
+            json!({"time": time.as_secs_f64(), "node": null, "link": null, "body": null, "what": message})
+        }
+        other => {
+            json!({"time": null, "node": null, "link": null, "body": null, "what": other.to_string()})
+        }
+    }
+}
+
 fn write_summary(
     out: &Path,
     world: &CoSim,
     outcome: &Outcome,
-    error: Option<&str>,
+    failure: Option<&Error>,
     exp: &Experiment,
 ) -> Result<()> {
     let scenario = world.scenario();
+    let error = failure.map(ToString::to_string);
     let stabilizer = match scenario.stabilizer {
         Stabilizer::Smc { mu, k, epsilon } => {
             json!({"kind": "smc", "mu": mu, "k": k, "epsilon": epsilon})
@@ -305,6 +325,7 @@ fn write_summary(
         "seed": scenario.seed,
         "status": if error.is_some() { "diverged" } else { "ok" },
         "error": error,
+        "divergence": failure.map(divergence),
         "digest": outcome.digest,
         "digest_algorithm": DIGEST_ALGORITHM,
         "dynamics_digest": outcome.dynamics_digest,

@@ -71,7 +71,7 @@ pub mod table;
 
 use std::path::Path;
 
-pub use exec::{run, Options, Report, Shard};
+pub use exec::{run, Keep, Options, Report, Shard};
 pub use merge::{merge, MergeReport};
 pub use points::{derive_seed, splitmix64};
 

@@ -90,6 +90,14 @@ fn column(csv: &str, name: &str) -> Vec<String> {
         .collect()
 }
 
+/// Directory of point `i` of the sweep in `out`: `points/<key>`, the key read from the
+/// `point` column of `csv` (a `sweep.csv`).
+fn point_in(out: &Path, csv: &str, i: usize) -> PathBuf {
+    let index = column(csv, "index");
+    let row = index.iter().position(|x| *x == i.to_string()).unwrap();
+    out.join("points").join(&column(csv, "point")[row])
+}
+
 /// Same bytes of the files that must not depend on how the sweep was run.
 fn assert_same_outputs(a: &Path, b: &Path, what: &str) {
     for file in [
@@ -129,7 +137,8 @@ fn two_threads_write_the_same_bytes_as_one() {
     let csv = read(&outs[0].join("sweep.csv"));
     assert_eq!(
         csv.lines().next().unwrap(),
-        "index,tau1,tau2,seed,status,mean_cost,lost_frames,tau_tau1_requested,tau_tau1_achieved,\
+        "index,point,tau1,tau2,seed,status,diverged_at,diverged_node,diverged_where,mean_cost,\
+         lost_frames,tau_tau1_requested,tau_tau1_achieved,\
          tau_tau2_requested,tau_tau2_achieved,bandwidth,digest"
     );
     assert_eq!(
@@ -149,8 +158,9 @@ fn two_threads_write_the_same_bytes_as_one() {
     let timing = read(&outs[0].join("timing.csv"));
     assert!(timing.starts_with("index,wall_seconds\n0,"), "{timing}");
     assert_eq!(timing.lines().count(), 7);
-    assert!(outs[0].join("points/p5/done.json").is_file());
-    assert!(outs[0].join("points/p5/scenario.json").is_file());
+    let p5 = point_in(&outs[0], &csv, 5);
+    assert!(p5.join("done.json").is_file());
+    assert!(p5.join("scenario.json").is_file());
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -193,7 +203,7 @@ fn sharded_and_merged_equals_unsharded() {
 
     // A done.json edited after its run (here its mean cost) no longer matches the run's
     // summary.json: refused, naming the file.
-    let done = s2.join("points/p1/done.json");
+    let done = point_in(&s2, &read(&s2.join("sweep.csv")), 1).join("done.json");
     let text = read(&done);
     let mut v: Value = serde_json::from_str(&text).unwrap();
     let cost = v["row"]["mean_cost"].as_f64().expect("a mean cost");
@@ -203,7 +213,7 @@ fn sharded_and_merged_equals_unsharded() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(
-        err.contains("p1/done.json") && err.contains("does not match"),
+        err.contains(&done.display().to_string()) && err.contains("does not match"),
         "{err}"
     );
     std::fs::write(&done, text).unwrap();
@@ -232,13 +242,13 @@ fn resume_reruns_only_unfinished_points() {
     let out = dir.join("out");
     ok(&[&"sweep", &sweep, &"--out", &out]);
     let csv = read(&out.join("sweep.csv"));
-    let summary = |i: usize| out.join(format!("points/p{i}/summary.json"));
+    let summary = |i: usize| point_in(&out, &csv, i).join("summary.json");
     let mtime = |i: usize| std::fs::metadata(summary(i)).unwrap().modified().unwrap();
     let before: Vec<_> = (0..6).map(mtime).collect();
 
     // An interrupted sweep: two points never finished, the tables never written.
-    std::fs::remove_file(out.join("points/p1/done.json")).unwrap();
-    std::fs::remove_file(out.join("points/p4/done.json")).unwrap();
+    std::fs::remove_file(point_in(&out, &csv, 1).join("done.json")).unwrap();
+    std::fs::remove_file(point_in(&out, &csv, 4).join("done.json")).unwrap();
     std::fs::remove_file(out.join("sweep.csv")).unwrap();
 
     // Without --resume the directory is refused, untouched.
@@ -263,7 +273,7 @@ fn resume_reruns_only_unfinished_points() {
         assert_eq!(mtime(i), before[i], "finished point p{i} was rerun");
     }
     for i in [1, 4] {
-        assert!(out.join(format!("points/p{i}/done.json")).is_file());
+        assert!(point_in(&out, &csv, i).join("done.json").is_file());
     }
 
     // A changed definition reruns exactly the points it changes (tau1 = 0.01 → 0.02:
@@ -318,7 +328,7 @@ fn bad_sweeps_exit_2_naming_the_axis_and_write_nothing() {
         (
             "string for /dt",
             sweep(json!([axis("step", "/dt", json!([0.001, "fast"]))])),
-            vec!["point p1 (step = \"fast\"): dt:", "string"],
+            vec!["point p1 (step = fast): dt:", "string"],
         ),
         (
             "zero points",
@@ -394,14 +404,14 @@ fn seeds_are_derived_per_point_and_reproducible() {
         .iter()
         .map(|s| s.parse().unwrap())
         .collect();
-    // The base's seed is 7.
-    let want: Vec<u64> = (0..6).map(|i| dsmcosim::sweep::derive_seed(7, i)).collect();
-    assert_eq!(seeds, want);
     let distinct: std::collections::BTreeSet<u64> = seeds.iter().copied().collect();
     assert_eq!(distinct.len(), 6);
-    let scenario: Value = serde_json::from_str(&read(&a.join("points/p3/scenario.json"))).unwrap();
-    assert_eq!(scenario["seed"], json!(want[3]));
-    assert_eq!(scenario["name"], json!("taus_p3"));
+    let p3 = point_in(&a, &csv, 3);
+    let scenario: Value = serde_json::from_str(&read(&p3.join("scenario.json"))).unwrap();
+    assert_eq!(scenario["seed"], json!(seeds[3]));
+    let key = p3.file_name().unwrap().to_string_lossy().into_owned();
+    assert_eq!(key.len(), 16, "a 16-hex-digit key: {key}");
+    assert_eq!(scenario["name"], json!(format!("taus_{key}")));
     assert_eq!(scenario["channels"][0]["tau"], json!(0.005));
 
     // An axis on /seed wins over the derived seed; string values are quoted JSON and
@@ -418,16 +428,111 @@ fn seeds_are_derived_per_point_and_reproducible() {
     ok(&[&"sweep", &path, &"--out", &c]);
     let csv = read(&c.join("sweep.csv"));
     assert_eq!(column(&csv, "seed"), ["1", "2"]);
-    assert_eq!(
-        column(&csv, "ghosts"),
-        ["\"\"\"integrate\"\"\"", "\"\"\"hold\"\"\""]
-    );
+    assert_eq!(column(&csv, "ghosts"), ["integrate", "hold"]);
     let heatmap = read(&c.join("cost_heatmap.svg"));
+    // One cell per value, named by the value.
     assert!(
-        heatmap.contains("index of the value"),
-        "non-numeric axis label"
+        heatmap.contains("integrate") && heatmap.contains("hold"),
+        "categorical tick labels"
     );
     assert!(c.join("cost_vs_s.svg").is_file());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A point's seed and its `--resume` entry follow its configuration, not its index:
+/// a sweep that gains an axis value reruns only the new points, and the points it
+/// shares with the old sweep keep their seeds and digests.
+#[test]
+fn adding_an_axis_value_keeps_every_other_points_seed_and_resume_entry() {
+    let dir = scratch("grow");
+    let small = json!({
+        "name": "grow", "base": "base.json", "repeat": 2,
+        "axes": [{"name": "tau1", "pointer": "/channels/0/tau", "values": [0.001, 0.01]}]
+    });
+    let mut grown = small.clone();
+    grown["axes"][0]["values"] = json!([0.001, 0.005, 0.01]);
+    let out = dir.join("out");
+    ok(&[
+        &"sweep",
+        &write_sweep(&dir, "small.json", &small),
+        &"--out",
+        &out,
+    ]);
+    let before = read(&out.join("sweep.csv"));
+    // The same directory, the grown definition: only the two new points run.
+    let path = write_sweep(&dir, "grown.json", &grown);
+    let report = dsmcosim::sweep::run(
+        &path,
+        &out,
+        &dsmcosim::sweep::Options {
+            resume: true,
+            ..Default::default()
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!((report.points, report.ran, report.skipped), (6, 2, 4));
+    let after = read(&out.join("sweep.csv"));
+    let key = |csv: &str| -> Vec<(String, String, String, String)> {
+        let (t, r, s, d) = (
+            column(csv, "tau1"),
+            column(csv, "rep"),
+            column(csv, "seed"),
+            column(csv, "digest"),
+        );
+        (0..t.len())
+            .map(|i| (t[i].clone(), r[i].clone(), s[i].clone(), d[i].clone()))
+            .collect()
+    };
+    let (old, new) = (key(&before), key(&after));
+    assert_eq!(old.len(), 4);
+    assert_eq!(new.len(), 6);
+    for row in &old {
+        assert!(
+            new.contains(row),
+            "{row:?} changed when an axis value was added"
+        );
+    }
+    assert_ne!(old[0].2, old[1].2, "repetitions draw different seeds");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A point that diverges is a row that says where, a cross in the plots, and no part of
+/// any mean; `--keep summary` leaves only the small files.
+#[test]
+fn diverged_points_are_flagged_and_kept_out_of_the_means() {
+    let dir = scratch("diverged");
+    // A tiny divergence bound makes the stiff points fail at once.
+    let sweep = json!({
+        "name": "div", "base": "base.json", "repeat": 2,
+        "overrides": {"/divergence": {"max_violation": 1.0}},
+        "axes": [{"name": "bound", "pointer": "/divergence/max_violation", "values": [1e-9, 10.0]}]
+    });
+    let path = write_sweep(&dir, "div.json", &sweep);
+    let out = dir.join("out");
+    ok(&[&"sweep", &path, &"--out", &out, &"--keep", &"summary"]);
+    let csv = read(&out.join("sweep.csv"));
+    assert_eq!(column(&csv, "status"), ["diverged", "diverged", "ok", "ok"]);
+    let at = column(&csv, "diverged_at");
+    assert!(at[0].parse::<f64>().unwrap() >= 0.0, "time {at:?}");
+    assert!(at[2].is_empty());
+    assert!(column(&csv, "diverged_node")[0].parse::<u64>().unwrap() >= 1);
+    assert!(column(&csv, "diverged_where")[0].starts_with('L'));
+    let svg = read(&out.join("cost_vs_bound.svg"));
+    assert!(
+        svg.contains("diverged: 2 of 4 points"),
+        "legend counts them"
+    );
+    assert!(svg.contains("mean over rep"), "repetitions are averaged");
+    let mut kept: Vec<String> = std::fs::read_dir(point_in(&out, &csv, 0))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| !n.starts_with('.'))
+        .collect();
+    kept.sort();
+    assert_eq!(
+        kept,
+        ["done.json", "epochs.csv", "scenario.json", "summary.json"]
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

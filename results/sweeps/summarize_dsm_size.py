@@ -11,7 +11,7 @@ live at one D_s and the grid search and no optimization measured every window fr
 live state. "Tracks best" = the lowest DSM/grid ratio of mean window costs (the grid
 optimum is the best 1 ms point of each window, chosen with hindsight). The mean gap
 |DSM delay - grid optimum| over the windows is read from the per-point epochs.csv
-(points/p<i>/, written by the sweep, not stored in git); "-" where they are absent.
+(points/<point>/, written by the sweep, not stored in git); "-" where they are absent.
 Usage: results/sweeps/summarize_dsm_size.py [SWEEPS_DIR]"""
 import csv, os, sys
 
@@ -32,7 +32,7 @@ for sweep, reading in (("dsm_size_cp", "thesis reading"), ("dsm_size_cp_hold", "
     rows = list(csv.DictReader(open(path)))
     for dist in ("tau1", "state"):
         name = "space" if dist == "tau1" else "time"
-        mine = [r for r in rows if f'"name":"{dist}"' in r["distribution"]]
+        mine = [r for r in rows if r["distribution"] == name]
         print(f"== {reading}, {name} CP ({sweep})")
         print("   D_s [ms] | status | DSM [m] | grid [m] | no-opt [m] | DSM/grid | DSM/no-opt | mean gap [ms]")
         best = None
@@ -40,7 +40,7 @@ for sweep, reading in (("dsm_size_cp", "thesis reading"), ("dsm_size_cp_hold", "
             if r["status"] != "ok":
                 print(f"   {float(r['dsm_size']) * 1e3:g} | {r['status']} | | | | |"); continue
             dsm, grid, no = (float(r[k]) for k in ("mean_cost_dsm", "mean_cost_grid", "mean_cost_no_opt"))
-            g = gap(os.path.join(root, sweep, "points", f"p{r['index']}", "epochs.csv"), dist)
+            g = gap(os.path.join(root, sweep, "points", r["point"], "epochs.csv"), dist)
             gap_text = "-" if g is None else f"{g:.2f}"
             print(f"   {float(r['dsm_size']) * 1e3:g} | ok | {dsm:.4f} | {grid:.4f} | {no:.4f} | "
                   f"{dsm / grid:.3f} | {dsm / no:.3f} | {gap_text}")

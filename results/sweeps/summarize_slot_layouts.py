@@ -29,10 +29,11 @@ def main():
     names = [n for n, _ in gen.LAYOUTS]
     assert values == [json.loads(json.dumps(v)) for _, v in gen.LAYOUTS], \
         "sweep.json's layouts differ from make_tdma4_slot_layouts.py"
-    key = {json.dumps(v, sort_keys=True): i for i, v in enumerate(values)}
+    # sweep.csv names each layout by its label from the sweep file.
+    labels = sweep["axes"][0]["labels"]
     rows = list(csv.DictReader(open(os.path.join(out, "sweep.csv"))))
     for r in rows:
-        r["li"] = key[json.dumps(json.loads(r["layout"]), sort_keys=True)]
+        r["li"] = labels.index(r["layout"])
         r["cost"] = float(r["mean_cost"])
         r["lost"] = int(r["lost_frames"])
         r["d"] = float(r["drift"])

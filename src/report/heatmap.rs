@@ -57,6 +57,9 @@ pub struct Heatmap<'a> {
     /// A curve drawn over the cells as a plain white line (a constraint's boundary, such
     /// as a budget line); empty for none. Non-finite points are skipped.
     pub line_overlay: &'a [(f64, f64)],
+    /// Names of the cells along x and y for a categorical axis (then `x` or `y` are
+    /// the indices 0, 1, … and every cell is equally wide); `None` for a numeric axis.
+    pub categories: [Option<&'a [String]>; 2],
 }
 
 /// Renders `map` as an SVG document.
@@ -177,7 +180,15 @@ fn render(map: &Heatmap, target: &Path) -> Result<String> {
             .max()
             .unwrap_or(0)
     };
-    let y_area = (widest(&y_axis) + 40).clamp(60, 200);
+    let y_width = match map.categories[1] {
+        Some(names) => names
+            .iter()
+            .map(|n| text_width(n, TICK_PX))
+            .max()
+            .unwrap_or(0),
+        None => widest(&y_axis),
+    };
+    let y_area = (y_width + 40).clamp(60, 200);
     let v_area = (widest(&v_axis) + 40).clamp(60, BAR_PANEL - 30);
 
     let mut svg = String::new();
@@ -193,12 +204,29 @@ fn render(map: &Heatmap, target: &Path) -> Result<String> {
             .y_label_area_size(y_area)
             .build_cartesian_2d(x_axis, y_axis)
             .map_err(&err)?;
+        // A categorical axis names its cells at their (integer) centres.
+        let category = |names: Option<&[String]>, v: f64, axis: &Axis| match names {
+            None => axis.label(v),
+            Some(names) => {
+                let i = v.round();
+                if (v - i).abs() < 1e-9 && i >= 0.0 && (i as usize) < names.len() {
+                    names[i as usize].clone()
+                } else {
+                    String::new()
+                }
+            }
+        };
+        let (xa, ya) = (x_axis, y_axis);
+        let x_format = |v: &f64| category(map.categories[0], *v, &xa);
+        let y_format = |v: &f64| category(map.categories[1], *v, &ya);
         chart
             .configure_mesh()
             .x_desc(map.x_label)
             .y_desc(map.y_label)
-            .x_labels(10)
-            .y_labels(8)
+            .x_labels(map.categories[0].map_or(10, |c| c.len() * 2 + 1))
+            .y_labels(map.categories[1].map_or(8, |c| c.len() * 2 + 1))
+            .x_label_formatter(&x_format)
+            .y_label_formatter(&y_format)
             .disable_mesh()
             .label_style((FONT, TICK_PX))
             .axis_desc_style((FONT, DESC_PX))
@@ -319,6 +347,7 @@ mod tests {
             values: &values,
             path_overlay: &path,
             line_overlay: &[(1.0, 10.0), (6.5, 2.0)],
+            categories: [None, None],
         };
         let svg = heatmap_svg(&map).unwrap();
         let white_line = |svg: &str| {
@@ -328,6 +357,7 @@ mod tests {
         assert!(white_line(&svg), "the white line overlay");
         let none = heatmap_svg(&Heatmap {
             line_overlay: &[],
+            categories: [None, None],
             ..map
         })
         .unwrap();
@@ -374,6 +404,7 @@ mod tests {
                 values,
                 path_overlay,
                 line_overlay: path_overlay,
+                categories: [None, None],
             };
             heatmap_svg(&map).unwrap_or_else(|e| panic!("{x:?} {y:?} {values:?}: {e}"));
         }
@@ -392,6 +423,7 @@ mod tests {
             values: &values,
             path_overlay: &[],
             line_overlay: &[],
+            categories: [None, None],
         };
         assert!(heatmap_svg(&base).is_ok());
         for map in [

@@ -37,6 +37,9 @@ pub struct Series {
     /// Vertical bars `(x, low, high)` drawn in the series' colour (a range around each
     /// point, e.g. min–max over repeated draws); empty for none.
     pub bars: Vec<(f64, f64, f64)>,
+    /// Drawn as crosses without a line (points set apart from the lines, such as
+    /// diverged runs), in black.
+    pub crosses: bool,
 }
 
 impl Series {
@@ -46,6 +49,15 @@ impl Series {
             label: label.into(),
             points,
             bars: Vec::new(),
+            crosses: false,
+        }
+    }
+
+    /// Points drawn as black crosses, no line (see [`Series::crosses`]).
+    pub fn crosses(label: impl Into<String>, points: Vec<(f64, f64)>) -> Series {
+        Series {
+            crosses: true,
+            ..Series::new(label, points)
         }
     }
 
@@ -266,6 +278,18 @@ fn render(plot: &LinePlot, target: &Path) -> Result<String> {
             .map_err(&err)?;
 
         for (i, (series, drawn)) in plot.series.iter().zip(&prepared).enumerate() {
+            if series.crosses {
+                let style = BLACK.stroke_width(2);
+                let points: Vec<(f64, f64)> = drawn.lines.iter().flatten().copied().collect();
+                let anno = chart
+                    .draw_series(points.iter().map(|&p| Cross::new(p, 5, style)))
+                    .map_err(&err)?;
+                if i < LEGEND_MAX {
+                    anno.label(series.label.as_str())
+                        .legend(move |(x, y)| Cross::new((x + 10, y), 5, style));
+                }
+                continue;
+            }
             let style = PALETTE[i % PALETTE.len()].stroke_width(2);
             let anno = chart
                 .draw_series(

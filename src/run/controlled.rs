@@ -283,6 +283,7 @@ fn write_surface(out: &Path, world: &CoSim, exp: &Experiment, names: &[String]) 
             values: &values,
             path_overlay: &overlay,
             line_overlay: &[],
+            categories: [None, None],
         },
     )
 }

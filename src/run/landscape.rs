@@ -112,6 +112,7 @@ pub(super) fn write(out: &Path, world: &CoSim, exp: &Experiment) -> Result<()> {
             values: &values,
             path_overlay: &path,
             line_overlay: &budget,
+            categories: [None, None],
         },
     )
 }

@@ -50,9 +50,60 @@ impl Shard {
     }
 }
 
+/// What each point keeps of its run (`--keep`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Keep {
+    /// `scenario.json`, `summary.json`, `epochs.csv` and `done.json`: what `sweep.csv`
+    /// and a rerun need.
+    Summary,
+    /// The summary files and every CSV the run wrote (`trace.csv`, `network.csv`, …).
+    Trace,
+    /// Everything the run wrote, plots included.
+    #[default]
+    All,
+}
+
+impl Keep {
+    /// Whether a point keeps the run's file `name`.
+    fn keeps(self, name: &str) -> bool {
+        match self {
+            Keep::All => true,
+            Keep::Trace => name.ends_with(".csv") || name.ends_with(".json"),
+            Keep::Summary => matches!(name, "scenario.json" | "summary.json" | "epochs.csv"),
+        }
+    }
+
+    /// Removes from `dir` the run's files this setting does not keep (before `done.json`
+    /// is written).
+    fn prune(self, dir: &Path) -> Result<()> {
+        if self == Keep::All {
+            return Ok(());
+        }
+        let entries = std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))?;
+        for entry in entries {
+            let entry = entry.map_err(|e| Error::io(dir, e))?;
+            let path = entry.path();
+            let name = entry.file_name().to_string_lossy().into_owned();
+            if name == DONE || name.starts_with(".dsmcosim") || self.keeps(&name) {
+                continue;
+            }
+            let kind = entry.file_type().map_err(|e| Error::io(&path, e))?;
+            let removed = if kind.is_dir() {
+                std::fs::remove_dir_all(&path)
+            } else {
+                std::fs::remove_file(&path)
+            };
+            removed.map_err(|e| Error::io(&path, e))?;
+        }
+        Ok(())
+    }
+}
+
 /// Options of `dsmcosim sweep`.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Options {
+    /// What each point keeps of its run.
+    pub keep: Keep,
     /// Continue a sweep in the output directory: skip points whose `done.json` records
     /// the same point definition.
     pub resume: bool,
@@ -138,10 +189,19 @@ pub fn run(sweep_path: &Path, out: &Path, options: &Options) -> Result<Report> {
         .collect();
     let mut to_run = Vec::new();
     for p in &selected {
-        let dir = point_dir(out, p.index);
+        let dir = point_dir(out, &p.key);
         if options.resume {
             if let Ok(Some(done)) = Record::read(&dir) {
                 if done.same_point(&expected(p, &loaded.base_digest)) {
+                    if done.index != p.index {
+                        // An axis gained a value: the point moved in the order, its run
+                        // did not change.
+                        Record {
+                            index: p.index,
+                            ..done
+                        }
+                        .write(&dir)?;
+                    }
                     continue;
                 }
             }
@@ -160,7 +220,7 @@ pub fn run(sweep_path: &Path, out: &Path, options: &Options) -> Result<Report> {
     let results: Vec<Result<()>> = to_run
         .par_iter()
         .map(|p| {
-            let r = run_point(out, &loaded, p);
+            let r = run_point(out, &loaded, p, options.keep);
             let n = finished.fetch_add(1, Ordering::Relaxed) + 1;
             if let Ok(mut bar) = progress.lock() {
                 bar.tick(n);
@@ -175,7 +235,7 @@ pub fn run(sweep_path: &Path, out: &Path, options: &Options) -> Result<Report> {
     let records = selected
         .iter()
         .map(|p| {
-            let dir = point_dir(out, p.index);
+            let dir = point_dir(out, &p.key);
             Record::read(&dir)?.ok_or_else(|| {
                 Error::io(
                     dir.join(DONE),
@@ -205,6 +265,7 @@ fn expected(p: &Point, base_digest: &str) -> Record {
         base_digest: base_digest.to_string(),
         row: Row {
             status: String::new(),
+            divergence: None,
             mean_cost: None,
             mean_cost_by_method: Default::default(),
             lost_frames: 0,
@@ -216,13 +277,13 @@ fn expected(p: &Point, base_digest: &str) -> Record {
     }
 }
 
-/// Runs point `p` into `out/points/p<index>/`: `scenario.json`, the run's outputs,
+/// Runs point `p` into `out/points/<key>/`: `scenario.json`, the run's outputs,
 /// then `done.json`.
-fn run_point(out: &Path, loaded: &Loaded, p: &Point) -> Result<()> {
-    let dir = point_dir(out, p.index);
+fn run_point(out: &Path, loaded: &Loaded, p: &Point, keep: Keep) -> Result<()> {
+    let dir = point_dir(out, &p.key);
     create_dir_all(&dir)?;
     write_atomic(&dir.join("scenario.json"), p.text.as_bytes())?;
-    let label = format!("{}_p{}", loaded.plan.name, p.index);
+    let label = format!("{}_{}", loaded.plan.name, p.key);
     let scenario = crate::scenario::parse_str(&p.text, &label)?;
     let started = Instant::now();
     match crate::progress::quietly(|| crate::run::run(&scenario, &dir)) {
@@ -253,6 +314,7 @@ fn run_point(out: &Path, loaded: &Loaded, p: &Point) -> Result<()> {
         wall_seconds,
         ..expected(p, &loaded.base_digest)
     };
+    keep.prune(&dir)?;
     record.write(&dir)
 }
 

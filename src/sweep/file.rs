@@ -22,10 +22,19 @@ pub struct SweepFile {
     pub combine: Combine,
     /// The swept fields, at least one.
     pub axes: Vec<AxisFile>,
+    /// Runs of each configuration, on seeds derived from the configuration and the
+    /// repetition (a `rep` column in `sweep.csv`); default 1. Not with an axis on
+    /// `/seed`.
+    #[serde(default = "one")]
+    pub repeat: i64,
     /// Fixed values set on every point before the axes, keyed by JSON pointer (applied
     /// in the pointers' sorted order, so a parent before its children); default none.
     #[serde(default)]
     pub overrides: BTreeMap<String, Value>,
+}
+
+fn one() -> i64 {
+    1
 }
 
 /// How axes combine.

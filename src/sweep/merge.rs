@@ -24,9 +24,10 @@ pub struct MergeReport {
     pub diverged: usize,
 }
 
-/// The `done.json` records under `dir/points/`, by index, with the directory each came
-/// from. Sub-directories not named `p<digits>` or without a `done.json` are skipped.
-fn records(dir: &Path) -> Result<Vec<(usize, Record, PathBuf)>> {
+/// The `done.json` records under `dir/points/` of the points of `keys` (directory name →
+/// index), by index, with the directory each came from. Sub-directories not named by a
+/// point's key, or without a `done.json`, are skipped.
+fn records(dir: &Path, keys: &BTreeMap<String, usize>) -> Result<Vec<(usize, Record, PathBuf)>> {
     let points = dir.join("points");
     let entries = match std::fs::read_dir(&points) {
         Ok(e) => e,
@@ -37,12 +38,7 @@ fn records(dir: &Path) -> Result<Vec<(usize, Record, PathBuf)>> {
     for entry in entries {
         let entry = entry.map_err(|e| Error::io(&points, e))?;
         let name = entry.file_name();
-        let Some(index) = name
-            .to_str()
-            .and_then(|n| n.strip_prefix('p'))
-            .filter(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
-            .and_then(|d| d.parse::<usize>().ok())
-        else {
+        let Some(&index) = name.to_str().and_then(|n| keys.get(n)) else {
             continue;
         };
         let path = entry.path();
@@ -98,9 +94,10 @@ pub fn merge(out: &Path, shards: &[PathBuf]) -> Result<MergeReport> {
         &first.join("sweep.json").display().to_string(),
     )?)?;
     let n = plan.points.len();
+    let keys: BTreeMap<String, usize> = (0..n).map(|i| (plan.key(i), i)).collect();
     let mut by_index: BTreeMap<usize, (Record, PathBuf)> = BTreeMap::new();
     for dir in shards {
-        for (index, record, path) in records(dir)? {
+        for (index, record, path) in records(dir, &keys)? {
             let at = path.join(DONE).display().to_string();
             if record.index != index || index >= n {
                 return Err(Error::invalid(

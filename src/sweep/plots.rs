@@ -10,11 +10,13 @@
 //! its label says so. Legends name a value by the axis's `labels` entry when the sweep
 //! file gives one, else by the value itself when it is at most 16 characters, else by
 //! `#<index>`.
+//!
+//! A point whose run diverged is not data: it is left out of every mean, bar and
+//! heatmap cell, drawn as a black cross at the cost it had reached, and counted in the
+//! legend (`diverged: 6 of 600 points`) and, on the heatmap, in the title.
 
 use std::collections::BTreeMap;
 use std::path::Path;
-
-use serde_json::Value;
 
 use super::file::Combine;
 use super::points::{Axis, Plan};
@@ -77,6 +79,11 @@ fn cost(r: &Record) -> f64 {
     r.row.mean_cost.unwrap_or(f64::NAN)
 }
 
+/// Whether a point's run diverged (or failed otherwise): not data for means.
+fn diverged(r: &Record) -> bool {
+    r.row.status != "ok"
+}
+
 /// The ratio of the DSM's mean cost to a baseline's in one run (NaN where either is
 /// missing).
 fn dsm_over(r: &Record, baseline: &str) -> f64 {
@@ -116,14 +123,8 @@ const SHORT_VALUE: usize = 16;
 /// Legend text of value `v` of `axis`: its label from the sweep file, else the value
 /// when short, else `#<index>`.
 fn value_label(axis: &Axis, v: usize) -> String {
-    if let Some(labels) = &axis.labels {
-        return labels[v].clone();
-    }
-    let text = match &axis.values[v] {
-        Value::String(s) => s.clone(),
-        other => other.to_string(),
-    };
-    if text.chars().count() <= SHORT_VALUE {
+    let text = axis.label(v);
+    if axis.labels.is_some() || text.chars().count() <= SHORT_VALUE {
         text
     } else {
         format!("#{v}")
@@ -185,8 +186,13 @@ fn cost_vs(out: &Path, plan: &Plan, records: &[Record], metric: &Metric) -> Resu
     // Lines keyed by the other axes' value indices, so they come in axis order; within
     // a line, the costs of each x value (over the draws) in point order.
     let mut lines: BTreeMap<Vec<usize>, BTreeMap<usize, Vec<f64>>> = BTreeMap::new();
+    let mut failed = Vec::new();
     for r in records {
         let idx = &plan.points[r.index];
+        if diverged(r) {
+            failed.push((x[idx[xa]], (metric.value)(r)));
+            continue;
+        }
         let key = if grouped {
             others.iter().map(|&k| idx[k]).collect()
         } else {
@@ -199,8 +205,8 @@ fn cost_vs(out: &Path, plan: &Plan, records: &[Record], metric: &Metric) -> Resu
             .or_default()
             .push((metric.value)(r));
     }
-    let averaged = !draws.is_empty();
-    let series: Vec<Series> = lines
+    let averaged = !draws.is_empty() || plan.repeat > 1;
+    let mut series: Vec<Series> = lines
         .into_iter()
         .map(|(key, by_x)| {
             let mut points = Vec::new();
@@ -235,10 +241,23 @@ fn cost_vs(out: &Path, plan: &Plan, records: &[Record], metric: &Metric) -> Resu
             Series::new(label, points).with_bars(bars)
         })
         .collect();
+    if !failed.is_empty() {
+        series.push(Series::crosses(
+            format!(
+                "diverged: {} of {} points (left out; value until divergence)",
+                failed.len(),
+                records.len()
+            ),
+            failed,
+        ));
+    }
     let name = &plan.axes[xa].name;
     let mut title = format!("{} — {} vs {name}", plan.name, metric.what);
     if averaged {
-        let over: Vec<&str> = draws.iter().map(|&k| plan.axes[k].name.as_str()).collect();
+        let mut over: Vec<&str> = draws.iter().map(|&k| plan.axes[k].name.as_str()).collect();
+        if plan.repeat > 1 {
+            over.push("rep");
+        }
         title.push_str(&format!(" (mean over {}; bars: min–max)", over.join(", ")));
     }
     write_line_plot(
@@ -250,31 +269,28 @@ fn cost_vs(out: &Path, plan: &Plan, records: &[Record], metric: &Metric) -> Resu
     )
 }
 
-/// Cell centres (sorted distinct coordinates) and, per value index, its cell.
-fn cells(coords: &[f64]) -> (Vec<f64>, Vec<usize>) {
-    let mut centres = coords.to_vec();
-    centres.sort_by(f64::total_cmp);
-    centres.dedup();
-    let cell = coords
-        .iter()
-        .map(|c| centres.partition_point(|x| x < c))
-        .collect();
-    (centres, cell)
-}
-
-/// `cost_heatmap.svg` over the first two axes.
+/// `cost_heatmap.svg` over the first two axes: one equally wide cell per value of
+/// each, named by the value's label (a linear axis would make the cells of uneven
+/// values uneven, and cannot place values that are not numbers).
 fn heatmap(out: &Path, plan: &Plan, records: &[Record]) -> Result<()> {
-    let (xs, x_label) = coordinates(&plan.axes[0]);
-    let (ys, y_label) = coordinates(&plan.axes[1]);
-    let (x, x_cell) = cells(&xs);
-    let (y, y_cell) = cells(&ys);
+    let names =
+        |a: &Axis| -> Vec<String> { (0..a.values.len()).map(|v| value_label(a, v)).collect() };
+    let label = |a: &Axis| match unit(a) {
+        Some(u) if a.numbers().is_some() => format!("{} [{u}]", a.name),
+        _ => a.name.clone(),
+    };
+    let (x_names, y_names) = (names(&plan.axes[0]), names(&plan.axes[1]));
+    let (x_label, y_label) = (label(&plan.axes[0]), label(&plan.axes[1]));
+    let x: Vec<f64> = (0..x_names.len()).map(|i| i as f64).collect();
+    let y: Vec<f64> = (0..y_names.len()).map(|i| i as f64).collect();
     let mut sums = vec![vec![(0.0, 0usize); x.len()]; y.len()];
     let mut shared = false;
-    for r in records {
+    let failed = records.iter().filter(|r| diverged(r)).count();
+    for r in records.iter().filter(|r| !diverged(r)) {
         let idx = &plan.points[r.index];
         let c = cost(r);
         if c.is_finite() {
-            let cell = &mut sums[y_cell[idx[1]]][x_cell[idx[0]]];
+            let cell = &mut sums[idx[1]][idx[0]];
             shared |= cell.1 > 0;
             cell.0 += c;
             cell.1 += 1;
@@ -290,12 +306,21 @@ fn heatmap(out: &Path, plan: &Plan, records: &[Record]) -> Result<()> {
         .collect();
     let mut title = format!("{} — mean cost", plan.name);
     if shared {
-        let rest: Vec<&str> = plan.axes[2..].iter().map(|a| a.name.as_str()).collect();
+        let mut rest: Vec<&str> = plan.axes[2..].iter().map(|a| a.name.as_str()).collect();
+        if plan.repeat > 1 {
+            rest.push("rep");
+        }
         if rest.is_empty() {
             title.push_str(" (mean over points with equal values)");
         } else {
             title.push_str(&format!(" (mean over {})", rest.join(", ")));
         }
+    }
+    if failed > 0 {
+        title.push_str(&format!(
+            "; {failed} of {} diverged, left out",
+            records.len()
+        ));
     }
     write_heatmap(
         &out.join("cost_heatmap.svg"),
@@ -309,18 +334,7 @@ fn heatmap(out: &Path, plan: &Plan, records: &[Record]) -> Result<()> {
             values: &values,
             path_overlay: &[],
             line_overlay: &[],
+            categories: [Some(&x_names), Some(&y_names)],
         },
     )
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn cells_sort_and_merge_equal_coordinates() {
-        let (c, cell) = cells(&[2.0, 0.5, 2.0, 1.0]);
-        assert_eq!(c, vec![0.5, 1.0, 2.0]);
-        assert_eq!(cell, vec![2, 0, 2, 1]);
-    }
 }

@@ -10,10 +10,15 @@ use super::pointer::Pointer;
 use crate::error::{Error, Result};
 
 /// CSV columns an axis may not be named (nor start with `mean_cost_` or `tau_`).
-const RESERVED: [&str; 7] = [
+const RESERVED: [&str; 12] = [
+    "point",
     "index",
+    "rep",
     "seed",
     "status",
+    "diverged_at",
+    "diverged_node",
+    "diverged_where",
     "mean_cost",
     "lost_frames",
     "bandwidth",
@@ -29,12 +34,24 @@ pub struct Axis {
     pub pointer: Pointer,
     /// Its values, in file order (a range already expanded).
     pub values: Vec<Value>,
-    /// Short names of the values for plot legends, one per value; `None` when the file
-    /// gives none.
+    /// Short names of the values for `sweep.csv` and plot legends, one per value; `None`
+    /// when the file gives none (then every value is a number or a string).
     pub labels: Option<Vec<String>>,
 }
 
 impl Axis {
+    /// The name of value `v` in `sweep.csv` and plots: its `labels` entry, else a
+    /// number as it is, else a string's text.
+    pub fn label(&self, v: usize) -> String {
+        if let Some(labels) = &self.labels {
+            return labels[v].clone();
+        }
+        match &self.values[v] {
+            Value::String(s) => s.clone(),
+            other => other.to_string(),
+        }
+    }
+
     /// The values as numbers, if every one is a number.
     pub fn numbers(&self) -> Option<Vec<f64>> {
         self.values.iter().map(Value::as_f64).collect()
@@ -53,6 +70,9 @@ pub struct Plan {
     pub axes: Vec<Axis>,
     /// Fixed values, in the pointers' sorted order.
     pub overrides: Vec<(Pointer, Value)>,
+    /// Runs of each configuration (`repeat`, ≥ 1): point `i` is repetition
+    /// `i mod repeat` of configuration `i / repeat`.
+    pub repeat: usize,
     /// `points[i][k]`: index into `axes[k].values` of point `i`.
     pub points: Vec<Vec<usize>>,
 }
@@ -67,14 +87,54 @@ impl Plan {
             .collect()
     }
 
-    /// `name = value, …` of point `i`, for messages (values as compact JSON).
+    /// Repetition of point `i` (0-based; 0 without `repeat`).
+    pub fn rep(&self, i: usize) -> usize {
+        i % self.repeat
+    }
+
+    /// `name = label, …` of point `i`, for messages.
     pub fn describe(&self, i: usize) -> String {
-        self.axes
+        let mut parts: Vec<String> = self
+            .axes
             .iter()
-            .zip(self.values(i))
-            .map(|(a, v)| format!("{} = {v}", a.name))
-            .collect::<Vec<_>>()
-            .join(", ")
+            .zip(&self.points[i])
+            .map(|(a, &v)| format!("{} = {}", a.name, a.label(v)))
+            .collect();
+        if self.repeat > 1 {
+            parts.push(format!("rep = {}", self.rep(i)));
+        }
+        parts.join(", ")
+    }
+
+    /// The key point `i`'s seed derives from: BLAKE3 of its configuration — each
+    /// axis's pointer and value (compact JSON), in pointer order — and its repetition,
+    /// first 8 bytes little-endian. It does not depend on the point's index, so adding
+    /// a value to an axis leaves every other point's seed (and its `--resume` entry)
+    /// unchanged.
+    pub fn seed_key(&self, i: usize) -> u64 {
+        let mut parts: Vec<(String, String)> = self
+            .axes
+            .iter()
+            .zip(&self.points[i])
+            .map(|(a, &v)| (a.pointer.to_string(), a.values[v].to_string()))
+            .collect();
+        parts.sort();
+        let mut text = String::new();
+        for (pointer, value) in parts {
+            text.push_str(&format!("{pointer}={value}\n"));
+        }
+        text.push_str(&format!("rep={}", self.rep(i)));
+        let hash = blake3::hash(text.as_bytes());
+        let mut bytes = [0u8; 8];
+        bytes.copy_from_slice(&hash.as_bytes()[..8]);
+        u64::from_le_bytes(bytes)
+    }
+
+    /// The name of point `i`'s directory (`points/<key>/`) and the suffix of its
+    /// scenario's name: [`Plan::seed_key`] in 16 hex digits, so a point keeps its
+    /// directory, its files' bytes and its `--resume` entry when other points are added.
+    pub fn key(&self, i: usize) -> String {
+        format!("{:016x}", self.seed_key(i))
     }
 }
 
@@ -87,10 +147,10 @@ pub fn splitmix64(x: u64) -> u64 {
     z ^ (z >> 31)
 }
 
-/// Seed of point `index` of a sweep over a base scenario with seed `base`:
-/// `splitmix64(base ^ splitmix64(index))`.
-pub fn derive_seed(base: u64, index: u64) -> u64 {
-    splitmix64(base ^ splitmix64(index))
+/// Seed of a point with configuration key `key` ([`Plan::seed_key`]) of a sweep over a
+/// base scenario with seed `base`: `splitmix64(base ^ splitmix64(key))`.
+pub fn derive_seed(base: u64, key: u64) -> u64 {
+    splitmix64(base ^ splitmix64(key))
 }
 
 /// The values of a range: `from + i·(to − from)/(steps − 1)` for `i < steps − 1`, and
@@ -231,6 +291,22 @@ fn axis(k: usize, a: &AxisFile, earlier: &[Axis]) -> Result<Axis> {
             ));
         }
     }
+    if a.labels.is_none() {
+        if let Some(i) = values
+            .iter()
+            .position(|v| !(v.is_number() || v.is_string()))
+        {
+            return Err(Error::invalid(
+                at("labels"),
+                format!(
+                    "axis `{}`: values[{i}] is {}; an axis whose values are not all numbers or \
+                     strings needs `labels` (one short name per value, for sweep.csv and the plots)",
+                    a.name,
+                    if values[i].is_array() { "an array" } else { "not a number or string" }
+                ),
+            ));
+        }
+    }
     Ok(Axis {
         name: a.name.clone(),
         pointer,
@@ -281,14 +357,35 @@ pub fn plan(file: &SweepFile) -> Result<Plan> {
         }
         overrides.push((pointer, value.clone()));
     }
+    let repeat = usize::try_from(file.repeat)
+        .ok()
+        .filter(|&r| (1..=MAX_SWEEP_POINTS).contains(&r))
+        .ok_or_else(|| {
+            Error::invalid(
+                "repeat",
+                format!(
+                    "must be a whole number from 1 to {MAX_SWEEP_POINTS} (got {})",
+                    file.repeat
+                ),
+            )
+        })?;
+    if repeat > 1 {
+        if let Some(k) = axes.iter().position(|a| a.pointer.tokens() == ["seed"]) {
+            return Err(Error::invalid(
+                format!("axes[{k}].pointer"),
+                "an axis on /seed and `repeat` both draw seeds: use one of them",
+            ));
+        }
+    }
     let lens: Vec<usize> = axes.iter().map(|a| a.values.len()).collect();
-    let count = match file.combine {
+    let configurations = match file.combine {
         Combine::Zip => lens[0],
         Combine::Factorial => lens
             .iter()
             .try_fold(1usize, |n, &m| n.checked_mul(m))
             .unwrap_or(usize::MAX),
     };
+    let count = configurations.saturating_mul(repeat);
     if count > MAX_SWEEP_POINTS {
         return Err(Error::invalid(
             "axes",
@@ -298,7 +395,7 @@ pub fn plan(file: &SweepFile) -> Result<Plan> {
             ),
         ));
     }
-    let points = match file.combine {
+    let points: Vec<Vec<usize>> = match file.combine {
         Combine::Zip => {
             if let Some(k) = lens.iter().position(|&n| n != lens[0]) {
                 return Err(Error::invalid(
@@ -328,13 +425,33 @@ pub fn plan(file: &SweepFile) -> Result<Plan> {
                 .collect()
         }
     };
-    Ok(Plan {
+    let points = points
+        .into_iter()
+        .flat_map(|p| std::iter::repeat_n(p, repeat))
+        .collect();
+    let plan = Plan {
         name: file.name.clone(),
         combine: file.combine,
         axes,
         overrides,
+        repeat,
         points,
-    })
+    };
+    // Two points of one configuration would share a directory and a seed.
+    let mut seen = std::collections::BTreeMap::new();
+    for i in 0..plan.points.len() {
+        if let Some(j) = seen.insert(plan.seed_key(i), i) {
+            return Err(Error::invalid(
+                "axes",
+                format!(
+                    "points p{j} and p{i} are the same configuration ({}); give each value once \
+                     (use `repeat` for more runs of one configuration)",
+                    plan.describe(i)
+                ),
+            ));
+        }
+    }
+    Ok(plan)
 }
 
 /// One point, checked: its scenario text parses and validates.
@@ -342,6 +459,8 @@ pub fn plan(file: &SweepFile) -> Result<Plan> {
 pub struct Point {
     /// Index in the sweep.
     pub index: usize,
+    /// Its directory's name ([`Plan::key`]).
+    pub key: String,
     /// Axis values, in axis order.
     pub values: Vec<Value>,
     /// The seed of its scenario.
@@ -367,7 +486,7 @@ fn build(
             .map_err(|m| Error::invalid(format!("overrides.{pointer}"), m))?;
     }
     if let Some(base_seed) = base_seed {
-        doc["seed"] = Value::from(derive_seed(base_seed, i as u64));
+        doc["seed"] = Value::from(derive_seed(base_seed, plan.seed_key(i)));
     }
     let mut created = Vec::new();
     for (k, (axis, value)) in plan.axes.iter().zip(plan.values(i)).enumerate() {
@@ -383,7 +502,7 @@ fn build(
             created.push(k);
         }
     }
-    doc["name"] = Value::from(format!("{}_p{i}", plan.name));
+    doc["name"] = Value::from(format!("{}_{}", plan.name, plan.key(i)));
     Ok((doc, created))
 }
 
@@ -434,8 +553,8 @@ fn point(plan: &Plan, base: &Value, base_seed: Option<u64>, i: usize) -> Result<
     let mut text = serde_json::to_string_pretty(&doc)
         .map_err(|e| Error::invalid(format!("point p{i}"), e.to_string()))?;
     text.push('\n');
-    let scenario =
-        crate::scenario::parse_str(&text, &format!("{}_p{i}", plan.name)).map_err(|e| {
+    let scenario = crate::scenario::parse_str(&text, &format!("{}_{}", plan.name, plan.key(i)))
+        .map_err(|e| {
             let note: String = created
                 .iter()
                 .map(|&k| {
@@ -456,6 +575,7 @@ fn point(plan: &Plan, base: &Value, base_seed: Option<u64>, i: usize) -> Result<
         .map_err(|e| Error::invalid(format!("point p{i} ({})", plan.describe(i)), e.to_string()))?;
     Ok(Point {
         index: i,
+        key: plan.key(i),
         values: plan.values(i),
         seed: scenario.seed,
         digest: blake3::hash(text.as_bytes()).to_hex().to_string(),
@@ -483,7 +603,7 @@ mod tests {
         assert_eq!(p.points.len(), 6);
         assert_eq!(p.points[1], vec![0, 1]);
         assert_eq!(p.points[3], vec![1, 0]);
-        assert_eq!(p.describe(5), "a = 2, b = \"z\"");
+        assert_eq!(p.describe(5), "a = 2, b = z");
     }
 
     #[test]
@@ -570,5 +690,63 @@ mod tests {
         assert_eq!(splitmix64(0), 0xE220_A839_7B1D_CDAF);
         let seeds: std::collections::BTreeSet<u64> = (0..1000).map(|i| derive_seed(7, i)).collect();
         assert_eq!(seeds.len(), 1000);
+    }
+
+    #[test]
+    fn a_seed_follows_the_configuration_not_the_index() {
+        let small = plan_of(
+            r#"{"name": "s", "base": "b", "repeat": 2, "axes": [
+                {"name": "a", "pointer": "/a", "values": [1, 3]}]}"#,
+        )
+        .unwrap();
+        let grown = plan_of(
+            r#"{"name": "s", "base": "b", "repeat": 2, "axes": [
+                {"name": "a", "pointer": "/a", "values": [1, 2, 3]}]}"#,
+        )
+        .unwrap();
+        assert_eq!(small.points.len(), 4);
+        assert_eq!(grown.points.len(), 6);
+        // a = 3, rep 1 is point 3 of the first sweep and point 5 of the second.
+        assert_eq!((small.rep(3), grown.rep(5)), (1, 1));
+        assert_eq!(small.seed_key(3), grown.seed_key(5));
+        assert_eq!(small.seed_key(0), grown.seed_key(0));
+        assert_ne!(small.seed_key(0), small.seed_key(1), "repetitions differ");
+        assert_eq!(small.describe(3), "a = 3, rep = 1");
+    }
+
+    #[test]
+    fn structured_values_need_labels_and_repeat_excludes_a_seed_axis() {
+        let e = plan_of(
+            r#"{"name": "s", "base": "b", "axes": [
+                {"name": "a", "pointer": "/a", "values": [[1, 2], [3]]}]}"#,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.starts_with("axes[0].labels: axis `a`: values[0] is an array"),
+            "{e}"
+        );
+        let e = plan_of(
+            r#"{"name": "s", "base": "b", "repeat": 3, "axes": [
+                {"name": "d", "pointer": "/seed", "values": [1, 2]}]}"#,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.starts_with("axes[0].pointer: an axis on /seed and `repeat`"),
+            "{e}"
+        );
+        for bad in ["0", "-1", "100001"] {
+            let e = plan_of(&format!(
+                r#"{{"name": "s", "base": "b", "repeat": {bad}, "axes": [
+                {{"name": "a", "pointer": "/a", "values": [1]}}]}}"#
+            ))
+            .unwrap_err()
+            .to_string();
+            assert!(
+                e.starts_with("repeat: must be a whole number"),
+                "{bad}: {e}"
+            );
+        }
     }
 }

@@ -26,6 +26,18 @@ pub struct ChannelRow {
     pub tau_achieved: Option<f64>,
 }
 
+/// Where and when a diverged point failed (summary.json → `divergence`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DivergenceRow {
+    /// Simulated time of the failing step [s].
+    pub time: Option<f64>,
+    /// Computing node, 1-based as printed (0 on a monolithic run).
+    pub node: Option<u64>,
+    /// The failing link (`L14`) or unlinked body (`B3`).
+    pub place: Option<String>,
+}
+
 /// The measured part of one row of `sweep.csv`. `None` is a value the run did not
 /// produce (an empty CSV field).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -33,6 +45,9 @@ pub struct ChannelRow {
 pub struct Row {
     /// `ok` or `diverged`.
     pub status: String,
+    /// Where a diverged run failed (absent for a run that finished).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub divergence: Option<DivergenceRow>,
     /// Mean window cost [m].
     pub mean_cost: Option<f64>,
     /// `mean_cost_<method>` of a controlled run, by method [m].
@@ -100,8 +115,20 @@ impl Row {
             .get("bandwidth_mean")
             .and_then(Value::as_f64)
             .or(bandwidth_sum);
+        let divergence = obj
+            .get("divergence")
+            .filter(|d| d.is_object())
+            .map(|d| DivergenceRow {
+                time: d.get("time").and_then(Value::as_f64),
+                node: d.get("node").and_then(Value::as_u64),
+                place: ["link", "body"]
+                    .iter()
+                    .find_map(|k| d.get(*k).and_then(Value::as_str))
+                    .map(str::to_string),
+            });
         Ok(Row {
             status: text("status")?,
+            divergence,
             mean_cost: obj.get("mean_cost").and_then(Value::as_f64),
             mean_cost_by_method,
             lost_frames: obj.get("lost_frames").and_then(Value::as_u64).unwrap_or(0),
@@ -112,7 +139,7 @@ impl Row {
     }
 }
 
-/// The content of `points/p<index>/done.json`: the point's definition and its row.
+/// The content of `points/<key>/done.json`: the point's definition and its row.
 /// Written last, atomically, once every file of the point's run is in place.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -123,7 +150,7 @@ pub struct Record {
     pub values: Vec<Value>,
     /// Its scenario's seed.
     pub seed: u64,
-    /// BLAKE3 (hex) of its scenario text (`points/p<index>/scenario.json`).
+    /// BLAKE3 (hex) of its scenario text (`points/<key>/scenario.json`).
     pub scenario_digest: String,
     /// BLAKE3 (hex) of the base scenario file's bytes.
     pub base_digest: String,
@@ -134,11 +161,10 @@ pub struct Record {
 }
 
 impl Record {
-    /// Whether this record is of the same point definition: index, axis values, seed
-    /// and scenario text.
+    /// Whether this record is of the same point definition: axis values, seed and
+    /// scenario text (not the index, which moves when an axis gains a value).
     pub fn same_point(&self, other: &Record) -> bool {
-        self.index == other.index
-            && self.values == other.values
+        self.values == other.values
             && self.seed == other.seed
             && self.scenario_digest == other.scenario_digest
     }
@@ -173,9 +199,10 @@ impl Record {
 /// File name of the marker of a finished point.
 pub const DONE: &str = "done.json";
 
-/// Directory of point `index` under a sweep's output directory: `points/p<index>`.
-pub fn point_dir(out: &Path, index: usize) -> PathBuf {
-    out.join("points").join(format!("p{index}"))
+/// Directory of the point with key `key` ([`super::points::Plan::key`]) under a sweep's
+/// output directory: `points/<key>`.
+pub fn point_dir(out: &Path, key: &str) -> PathBuf {
+    out.join("points").join(key)
 }
 
 #[cfg(test)]
@@ -204,12 +231,30 @@ mod tests {
             "channels": [{"name": "c", "tau": 0.005, "tau_requested": 0.004, "tau_achieved": 0.0045}],
         });
         let r = Row::from_summary(&s, Path::new("summary.json")).unwrap();
+        assert_eq!(r.divergence, None, "no `divergence` object: none");
         assert_eq!(r.lost_frames, 3);
         assert_eq!(r.bandwidth, Some(400.0));
         assert_eq!(r.channels[0].tau_requested, Some(0.004));
         assert_eq!(
             r.mean_cost_by_method,
             BTreeMap::from([("dsm".to_string(), Some(1.5)), ("grid".to_string(), None)])
+        );
+    }
+
+    #[test]
+    fn a_diverged_run_says_where() {
+        let s = json!({
+            "status": "diverged", "digest": "cd", "channels": [],
+            "divergence": {"time": 3.12, "node": 2, "link": "L14", "body": null, "what": "|w| = 1.1 m"},
+        });
+        let r = Row::from_summary(&s, Path::new("summary.json")).unwrap();
+        assert_eq!(
+            r.divergence,
+            Some(DivergenceRow {
+                time: Some(3.12),
+                node: Some(2),
+                place: Some("L14".into())
+            })
         );
     }
 

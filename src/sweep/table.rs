@@ -1,18 +1,21 @@
 //! `sweep.csv` and `timing.csv` from the points' records.
 //!
-//! `sweep.csv` columns: `index`, one per axis, `seed`, `status`, `mean_cost`,
+//! `sweep.csv` columns: `index`, `point` (the point's directory under `points/`), one
+//! per axis, `rep` (with `repeat` > 1), `seed`,
+//! `status`, `diverged_at` [s], `diverged_node`, `diverged_where` (the link `L14` or body
+//! `B3`; the three are empty for a point that finished), `mean_cost`,
 //! `mean_cost_<method>` for every method any record has (sorted), `lost_frames`,
 //! `tau_<name>_requested,tau_<name>_achieved` for every channel any record has (in order
 //! of first appearance by index), `bandwidth`, `digest`. Numbers are in Rust's shortest
-//! round-trip form; a value a run did not produce is an empty field. Axis values are
-//! written as JSON: numbers as they are, anything else compact and CSV-quoted.
+//! round-trip form; a value a run did not produce is an empty field. An axis column
+//! holds the value's label ([`super::points::Axis::label`]): the sweep file's `labels`
+//! entry, else a number as it is, else a string's text — never JSON, so every column
+//! loads into a typed column (pandas, R, a spreadsheet).
 //!
 //! Wall time is not in `sweep.csv` (which is a pure function of the sweep and the
 //! binary); it is in `timing.csv` (`index,wall_seconds`).
 
 use std::collections::BTreeSet;
-
-use serde_json::Value;
 
 use super::points::Plan;
 use super::record::Record;
@@ -28,14 +31,6 @@ fn num(x: Option<f64>) -> String {
 /// A CSV-quoted text field.
 fn quoted(s: &str) -> String {
     format!("\"{}\"", s.replace('"', "\"\""))
-}
-
-/// An axis value field: a number as JSON, anything else as compact JSON, quoted.
-pub fn value_field(v: &Value) -> String {
-    match v {
-        Value::Number(n) => n.to_string(),
-        other => quoted(&other.to_string()),
-    }
 }
 
 /// A text field, quoted only if it needs to be.
@@ -61,9 +56,22 @@ pub fn sweep_csv(plan: &Plan, records: &[Record]) -> String {
             }
         }
     }
-    let mut header = vec!["index".to_string()];
+    let mut header = vec!["index".to_string(), "point".to_string()];
     header.extend(plan.axes.iter().map(|a| a.name.clone()));
-    header.extend(["seed", "status", "mean_cost"].map(String::from));
+    if plan.repeat > 1 {
+        header.push("rep".into());
+    }
+    header.extend(
+        [
+            "seed",
+            "status",
+            "diverged_at",
+            "diverged_node",
+            "diverged_where",
+            "mean_cost",
+        ]
+        .map(String::from),
+    );
     header.extend(methods.iter().map(|m| format!("mean_cost_{m}")));
     header.push("lost_frames".into());
     for c in &channels {
@@ -75,10 +83,21 @@ pub fn sweep_csv(plan: &Plan, records: &[Record]) -> String {
     s.push('\n');
     for r in records {
         let row = &r.row;
-        let mut f = vec![r.index.to_string()];
-        f.extend(r.values.iter().map(value_field));
+        let mut f = vec![r.index.to_string(), plan.key(r.index)];
+        let idx = &plan.points[r.index];
+        f.extend(plan.axes.iter().zip(idx).map(|(a, &v)| text(&a.label(v))));
+        if plan.repeat > 1 {
+            f.push(plan.rep(r.index).to_string());
+        }
         f.push(r.seed.to_string());
         f.push(text(&row.status));
+        let d = row.divergence.as_ref();
+        f.push(num(d.and_then(|d| d.time)));
+        f.push(
+            d.and_then(|d| d.node)
+                .map_or(String::new(), |n| n.to_string()),
+        );
+        f.push(text(d.and_then(|d| d.place.as_deref()).unwrap_or_default()));
         f.push(num(row.mean_cost));
         f.extend(
             methods
@@ -113,8 +132,9 @@ mod tests {
     use super::*;
     use crate::sweep::file::parse;
     use crate::sweep::points::plan;
+    use crate::sweep::record::DivergenceRow;
     use crate::sweep::record::{ChannelRow, Row};
-    use serde_json::json;
+    use serde_json::{json, Value};
     use std::collections::BTreeMap;
 
     fn record(index: usize, values: Vec<Value>, methods: &[(&str, f64)], channel: &str) -> Record {
@@ -126,6 +146,7 @@ mod tests {
             base_digest: "b".into(),
             row: Row {
                 status: "ok".into(),
+                divergence: None,
                 mean_cost: Some(0.5),
                 mean_cost_by_method: methods
                     .iter()
@@ -149,22 +170,33 @@ mod tests {
         let p = plan(
             &parse(
                 r#"{"name": "s", "base": "b", "axes": [
-                {"name": "slots", "pointer": "/a", "values": [[1, 2], "x"]}]}"#,
+                {"name": "slots", "pointer": "/a", "values": [[1, 2], "x"],
+                 "labels": ["one, two", "x"]}]}"#,
                 "s",
             )
             .unwrap(),
         )
         .unwrap();
-        let rows = [
+        let mut rows = [
             record(0, vec![json!([1, 2])], &[("grid", 0.25)], "c1"),
             record(1, vec![json!("x")], &[("dsm", 0.125)], "c2"),
         ];
+        rows[1].row.status = "diverged".into();
+        rows[1].row.divergence = Some(DivergenceRow {
+            time: Some(3.12),
+            node: Some(2),
+            place: Some("L14".into()),
+        });
+        let (k0, k1) = (p.key(0), p.key(1));
         assert_eq!(
             sweep_csv(&p, &rows),
-            "index,slots,seed,status,mean_cost,mean_cost_dsm,mean_cost_grid,lost_frames,\
+            format!(
+                "index,point,slots,seed,status,diverged_at,diverged_node,diverged_where,mean_cost,\
+             mean_cost_dsm,mean_cost_grid,lost_frames,\
              tau_c1_requested,tau_c1_achieved,tau_c2_requested,tau_c2_achieved,bandwidth,digest\n\
-             0,\"[1,2]\",10,ok,0.5,,0.25,0,0.005,,,,400,d\n\
-             1,\"\"\"x\"\"\",11,ok,0.5,0.125,,0,,,0.005,,400,d\n"
+             0,{k0},\"one, two\",10,ok,,,,0.5,,0.25,0,0.005,,,,400,d\n\
+             1,{k1},x,11,diverged,3.12,2,L14,0.5,0.125,,0,,,0.005,,400,d\n"
+            )
         );
         assert_eq!(timing_csv(&rows), "index,wall_seconds\n0,0.25\n1,0.25\n");
     }

@@ -209,6 +209,7 @@ fn write_map(out: &Path, map: &StabilityMap) -> Result<()> {
             values: &outcome,
             path_overlay: &[],
             line_overlay: &[],
+            categories: [None, None],
         },
     )?;
     let max_w = grid(&|c| match c.outcome {
@@ -231,6 +232,7 @@ fn write_map(out: &Path, map: &StabilityMap) -> Result<()> {
             values: &max_w,
             path_overlay: &[],
             line_overlay: &[],
+            categories: [None, None],
         },
     )
 }
