@@ -38,6 +38,11 @@ pub enum Command {
     Validate {
         /// Scenario file (JSON).
         scenario: PathBuf,
+        /// Change a value of the scenario: a JSON pointer and a JSON value
+        /// (`--set /channels/0/tau=0.004`; text that is not JSON is a string:
+        /// `--set /integrator=rk4`). Repeatable, applied in order, validated like the file.
+        #[arg(long = "set", value_name = "POINTER=VALUE")]
+        sets: Vec<String>,
         /// Limits checked before the run starts.
         #[command(flatten)]
         limits: LimitArgs,
@@ -52,6 +57,11 @@ pub enum Command {
     Run {
         /// Scenario file (JSON).
         scenario: PathBuf,
+        /// Change a value of the scenario: a JSON pointer and a JSON value
+        /// (`--set /channels/0/tau=0.004`; text that is not JSON is a string:
+        /// `--set /integrator=rk4`). Repeatable, applied in order, validated like the file.
+        #[arg(long = "set", value_name = "POINTER=VALUE")]
+        sets: Vec<String>,
         /// Output directory (created if missing; files in it are replaced atomically).
         #[arg(long)]
         out: PathBuf,
@@ -183,7 +193,7 @@ pub enum Command {
     /// What-if sweep: run a base scenario with fields set from the axes of a sweep file,
     /// one run per point, in parallel.
     ///
-    /// Writes DIR/sweep.json (a copy of the sweep file), DIR/points/pI/ for point I (its
+    /// Writes DIR/sweep.json (a copy of the sweep file), DIR/points/KEY/ for each point (its
     /// scenario.json, run outputs and done.json), DIR/sweep.csv (one row per point),
     /// DIR/timing.csv (wall time per point), cost_vs_AXIS.svg and cost_heatmap.svg.
     /// Every point is validated before any runs. Exit codes: 0 done (diverged points
@@ -301,8 +311,12 @@ fn report(name: &str, outcome: &crate::run::Outcome, out: &std::path::Path) {
 /// Runs one subcommand.
 pub fn execute(command: Command) -> crate::Result<()> {
     match command {
-        Command::Validate { scenario, limits } => {
-            let s = scenario::load(&scenario)?;
+        Command::Validate {
+            scenario,
+            sets,
+            limits,
+        } => {
+            let (s, _) = scenario::load_with(&scenario, &sets)?;
             let options = run_options(None, false, limits)?;
             crate::run::preflight(&s, &options)?;
             let estimate = crate::run::budget::Estimate::of(&s, None);
@@ -327,19 +341,19 @@ pub fn execute(command: Command) -> crate::Result<()> {
         }
         Command::Run {
             scenario,
+            sets,
             out,
             force,
             limits,
             checkpoint_every,
         } => {
             let options = run_options(checkpoint_every, force, limits)?;
-            let s = scenario::load(&scenario)?;
+            let (s, text) = scenario::load_with(&scenario, &sets)?;
             let result = crate::run::run_with(&s, &out, options);
-            // The run directory keeps the file it ran (also beside a diverged run's
-            // outputs, which are a result too).
+            // The run directory keeps the scenario it ran, overrides applied (also
+            // beside a diverged run's outputs, which are a result too).
             if result.is_ok() || matches!(result, Err(crate::Error::Diverged(_))) {
-                let text = std::fs::read(&scenario).map_err(|e| crate::Error::io(&scenario, e))?;
-                crate::output::write_atomic(&out.join("scenario.json"), &text)?;
+                crate::output::write_atomic(&out.join("scenario.json"), text.as_bytes())?;
             }
             let outcome = result?;
             report(&s.name, &outcome, &out);

@@ -4,7 +4,9 @@
 pub mod file;
 pub mod grid;
 pub mod model;
+pub mod overrides;
 pub mod validate;
 
 pub use model::Scenario;
+pub use overrides::load_with;
 pub use validate::{load, parse_str};

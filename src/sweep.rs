@@ -25,36 +25,41 @@
 //! Unknown keys are errors. A pointer's parent must exist in the base; its last key may
 //! be new on an object (the scenario's own validation then names an unknown key).
 //!
-//! # Points and seeds
+//! # Points, keys and seeds
 //!
 //! Point `i`'s scenario is the base with, in order: the overrides, `seed` =
-//! `splitmix64(base_seed ^ splitmix64(i))` ([`derive_seed`]; `base_seed` is the base's
-//! `seed` after the overrides), the axis values, and `name` = `<sweep name>_p<i>`. An
-//! axis on `/seed` sets the seed itself. Every point is built and validated before any
-//! runs; a bad sweep file or point is an [`Error::Invalid`](crate::Error::Invalid)
-//! (exit code 2) naming the axis (`axes[1].pointer: …`) or the point with its axis
-//! values (`point p3 (drift = 50, tau1 = 0.004): dt: …`), and nothing is written.
+//! `splitmix64(base_seed ^ splitmix64(key))` ([`derive_seed`]; `base_seed` is the base's
+//! `seed` after the overrides; `key` is [`points::Plan::seed_key`], BLAKE3 of the
+//! point's configuration and repetition, never its index), the axis values, and `name`
+//! = `<sweep name>_<key as 16 hex digits>`. An axis on `/seed` sets the seed itself.
+//! `repeat: n` runs every configuration `n` times (a `rep` column). Every point is
+//! built and validated before any runs; a bad sweep file or point is an
+//! [`Error::Invalid`](crate::Error::Invalid) (exit code 2) naming the axis
+//! (`axes[1].pointer: …`) or the point with its axis values (`point p3 (drift = 50,
+//! tau1 = 0.004): dt: …`), and nothing is written.
 //!
 //! # Output (`DIR`)
 //!
 //! - `sweep.json`: a copy of the sweep file.
-//! - `points/p<i>/`: `scenario.json` (runs alone with `dsmcosim run`), the run's
-//!   outputs, and last `done.json` (written atomically: the point's axis values, seed,
-//!   BLAKE3 of its scenario text and of the base file, its row, its wall time).
+//! - `points/<key>/`: `scenario.json` (runs alone with `dsmcosim run`), the run's
+//!   outputs (what [`Keep`] keeps), and last `done.json` (written atomically: the
+//!   point's index, axis values, seed, BLAKE3 of its scenario text and of the base
+//!   file, its row, its wall time).
 //! - `sweep.csv`: one row per point in index order ([`table`] lists the columns); no
 //!   wall time, so the file is the same for any thread count, shard split or resume.
 //! - `timing.csv`: `index,wall_seconds`.
 //! - `cost_vs_<axis>.svg` and, with two or more axes, `cost_heatmap.svg` ([`plots`]).
 //!
-//! A point that diverges is a row with status `diverged`, not a failure. Points run in
+//! A point that diverges is a row with status `diverged` and where it failed, not a
+//! failure; the plots leave it out of their means and mark it. Points run in
 //! parallel on rayon's pool and the tables are written from the `done.json` records
 //! read back in index order, so the output does not depend on the thread count.
 //!
 //! # Resume, shards, merge
 //!
 //! Without `--resume`, a `DIR` that holds a sweep (`sweep.json` or `points/`) is an
-//! error. With it, a point whose `done.json` records the same index, axis values, seed
-//! and scenario text is skipped; any other is rerun. `--shard i/n` runs the points
+//! error. With it, a point whose `done.json` records the same axis values, seed and
+//! scenario text is skipped; any other is rerun. `--shard i/n` runs the points
 //! `k` with `k mod n = i − 1` and writes the tables of those rows only;
 //! `sweep-merge OUT DIR...` checks that the shard directories hold the same sweep
 //! definition and base, and every point exactly once, then writes `OUT/sweep.csv`,

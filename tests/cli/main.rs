@@ -7,6 +7,7 @@ use serde_json::{json, Value};
 
 mod contract;
 mod limits;
+mod overrides;
 
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_dsmcosim"))

@@ -1,0 +1,134 @@
+//! `--set POINTER=VALUE`: changing values of a scenario file from the command line
+//! (ns-3's `--param=value`, OMNeT++'s `--param=value` ini override).
+//!
+//! Each override is a JSON pointer (RFC 6901, `/channels/0/tau`) and a value: JSON
+//! (`0.004`, `"rk4"`, `{"kind": "ideal"}`), or, where the text is not JSON, the text as
+//! a string (`--set /integrator=rk4`). Overrides apply in the order given, to the file's
+//! JSON before it is parsed and validated, so an overridden scenario is checked exactly
+//! like a file. A pointer's parent must exist; its last key may be new on an object
+//! (validation then names a key it does not know) and its last index must exist on an
+//! array.
+
+use std::path::Path;
+
+use serde_json::Value;
+
+use super::model::Scenario;
+use crate::error::{Error, Result};
+
+/// Most `--set` overrides on one command line.
+pub const MAX_OVERRIDES: usize = 1000;
+
+/// The scenario of the file at `path` with `sets` applied, and its JSON text (what the
+/// run directory keeps as `scenario.json`). Without overrides the text is the file's
+/// own bytes.
+pub fn load_with(path: &Path, sets: &[String]) -> Result<(Scenario, String)> {
+    if sets.is_empty() {
+        let scenario = super::load(path)?;
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        return Ok((scenario, text));
+    }
+    if sets.len() > MAX_OVERRIDES {
+        return Err(Error::invalid(
+            "--set",
+            format!("{} overrides; at most {MAX_OVERRIDES}", sets.len()),
+        ));
+    }
+    let Ok(text) = std::fs::read_to_string(path) else {
+        // Not readable or not UTF-8: the plain loader says which, and where.
+        return super::load(path).map(|s| (s, String::new()));
+    };
+    let body = text.strip_prefix('\u{feff}').unwrap_or(&text);
+    let Ok(mut doc) = serde_json::from_str::<Value>(body) else {
+        // A syntax error: the plain loader names its line and column.
+        return super::load(path).map(|s| (s, text));
+    };
+    for set in sets {
+        apply(&mut doc, set)?;
+    }
+    let mut text =
+        serde_json::to_string_pretty(&doc).map_err(|e| Error::invalid("--set", e.to_string()))?;
+    text.push('\n');
+    let label = format!("{} with --set", path.display());
+    let scenario = super::parse_str(&text, &label)?;
+    Ok((scenario, text))
+}
+
+/// Applies one `POINTER=VALUE` to `doc`; errors name `--set` and the override.
+pub fn apply(doc: &mut Value, set: &str) -> Result<()> {
+    let bad = |m: String| Error::invalid(format!("--set {set}"), m);
+    let (pointer, value) = set
+        .split_once('=')
+        .ok_or_else(|| bad("must be POINTER=VALUE, e.g. /channels/0/tau=0.004".into()))?;
+    if !pointer.starts_with('/') {
+        return Err(bad(format!(
+            "the pointer must start with / (got {pointer:?})"
+        )));
+    }
+    let value: Value =
+        serde_json::from_str(value).unwrap_or_else(|_| Value::String(value.to_string()));
+    let (parent, last) = pointer.rsplit_once('/').unwrap_or(("", pointer));
+    let key = last.replace("~1", "/").replace("~0", "~");
+    let target = doc.pointer_mut(parent).ok_or_else(|| {
+        bad(format!(
+            "no {parent} in the scenario, so {pointer} has no parent"
+        ))
+    })?;
+    match target {
+        Value::Object(map) => {
+            map.insert(key, value);
+            Ok(())
+        }
+        Value::Array(items) => {
+            let len = items.len();
+            let slot = key
+                .parse::<usize>()
+                .ok()
+                .and_then(|i| items.get_mut(i))
+                .ok_or_else(|| {
+                    bad(format!(
+                        "{parent} is an array of {len}; the last token must be an index below {len}"
+                    ))
+                })?;
+            *slot = value;
+            Ok(())
+        }
+        _ => Err(bad(format!("{parent} is neither an object nor an array"))),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    #[test]
+    fn values_are_json_or_else_text() {
+        let mut doc = json!({"a": {"b": 1}, "list": [1, 2], "x~/y": 0});
+        apply(&mut doc, "/a/b=2.5").unwrap();
+        apply(&mut doc, "/a/c=rk4").unwrap();
+        apply(&mut doc, r#"/a/d={"kind": "ideal"}"#).unwrap();
+        apply(&mut doc, "/list/1=\"s\"").unwrap();
+        apply(&mut doc, "/x~0~1y=3").unwrap();
+        assert_eq!(
+            doc,
+            json!({"a": {"b": 2.5, "c": "rk4", "d": {"kind": "ideal"}}, "list": [1, "s"], "x~/y": 3})
+        );
+    }
+
+    #[test]
+    fn bad_overrides_are_named() {
+        let mut doc = json!({"a": {"b": 1}, "list": [1]});
+        for (set, want) in [
+            ("/a/b", "must be POINTER=VALUE"),
+            ("a/b=1", "must start with /"),
+            ("/nope/b=1", "no /nope in the scenario"),
+            ("/list/3=1", "an array of 1"),
+            ("/a/b/c=1", "neither an object nor an array"),
+        ] {
+            let e = apply(&mut doc, set).unwrap_err().to_string();
+            assert!(e.starts_with(&format!("--set {set}: ")), "{e}");
+            assert!(e.contains(want), "{set}: {e}");
+        }
+    }
+}
