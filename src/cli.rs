@@ -32,12 +32,19 @@ pub struct Cli {
 /// The subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Check a scenario file and print what it describes and what a run of it will
-    /// cost (steps, trace rows and bytes); writes nothing. Refuses (exit 2) what `run`
-    /// would refuse, the limits included.
+    /// Check a scenario file and print its plan: bodies and links, each node's bodies,
+    /// ghosts and links, each channel's requested and achieved τ, latency, bandwidth
+    /// and routes, the TDMA cycle with its slot list, the controller, and what a run
+    /// will cost (steps, messages, kernel events, trace rows and bytes). Writes nothing
+    /// but the --json file. Refuses (exit 2) what `run` would refuse, the limits
+    /// included.
     Validate {
         /// Scenario file (JSON).
         scenario: PathBuf,
+        /// Also write the plan as JSON into FILE (nodes, channels, the TDMA slot list,
+        /// the controller, the estimated cost).
+        #[arg(long, value_name = "FILE")]
+        json: Option<PathBuf>,
         /// Change a value of the scenario: a JSON pointer and a JSON value
         /// (`--set /channels/0/tau=0.004`; text that is not JSON is a string:
         /// `--set /integrator=rk4`). Repeatable, applied in order, validated like the file.
@@ -308,35 +315,55 @@ fn report(name: &str, outcome: &crate::run::Outcome, out: &std::path::Path) {
     say!("wrote {}", out.display());
 }
 
+/// Whether `path` holds a sweep file (a JSON object with `axes` and `base`) rather than
+/// a scenario; anything unreadable is left to the scenario loader to report.
+fn is_sweep(path: &std::path::Path) -> bool {
+    std::fs::read_to_string(path)
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .is_some_and(|v| v.get("axes").is_some() && v.get("base").is_some())
+}
+
 /// Runs one subcommand.
 pub fn execute(command: Command) -> crate::Result<()> {
     match command {
         Command::Validate {
             scenario,
             sets,
+            json,
             limits,
         } => {
+            if is_sweep(&scenario) {
+                if !sets.is_empty() || json.is_some() {
+                    return Err(crate::Error::invalid(
+                        "--set/--json",
+                        "apply to scenario files, not to a sweep file",
+                    ));
+                }
+                let c = crate::sweep::check(&scenario)?;
+                for w in &c.warnings {
+                    eprintln!("warning: {w}");
+                }
+                say!(
+                    "{}: ok — sweep {} of {} points, each validated; {} with a channel never served",
+                    scenario.display(),
+                    c.name,
+                    c.points,
+                    c.warnings.len()
+                );
+                return Ok(());
+            }
             let (s, _) = scenario::load_with(&scenario, &sets)?;
             let options = run_options(None, false, limits)?;
             crate::run::preflight(&s, &options)?;
-            let estimate = crate::run::budget::Estimate::of(&s, None);
-            say!(
-                "{}: ok — {} bodies, {} links, {} forces, {} steps of {} s, {} path, {} integrator",
-                scenario.display(),
-                s.bodies.len(),
-                s.links.len(),
-                s.forces.len(),
-                s.steps,
-                s.dt.as_secs_f64(),
-                s.body_model.name(),
-                s.integrator.name()
-            );
-            say!(
-                "a run writes {} trace rows of {} values (trace.csv at most {} bytes)",
-                estimate.trace_rows,
-                estimate.trace_columns,
-                estimate.trace_bytes
-            );
+            let plan = crate::run::plan::plan(&s)?;
+            if let Some(path) = json {
+                let mut text = serde_json::to_string_pretty(&plan)
+                    .map_err(|e| crate::Error::io(&path, std::io::Error::other(e)))?;
+                text.push('\n');
+                crate::output::write_atomic(&path, text.as_bytes())?;
+            }
+            say!("{}: ok — {}", scenario.display(), plan.text());
             Ok(())
         }
         Command::Run {

@@ -25,6 +25,7 @@ pub mod budget;
 mod controlled;
 mod landscape;
 mod network;
+pub mod plan;
 
 /// What a finished (or diverged) run measured.
 #[derive(Debug, Clone, PartialEq)]
@@ -243,6 +244,29 @@ cost; then, on a controlled run, the bits of each objective, the grid optimum's 
 bits, the measurement count). dynamics_digest: the dynamics chain alone. See \
 dsmcosim::trace::digest";
 
+/// The stabilizer as summary.json and the plan give it.
+pub(crate) fn stabilizer_json(scenario: &Scenario) -> Value {
+    match scenario.stabilizer {
+        Stabilizer::Smc { mu, k, epsilon } => {
+            json!({"kind": "smc", "mu": mu, "k": k, "epsilon": epsilon})
+        }
+        Stabilizer::Baumgarte { alpha, beta } => {
+            json!({"kind": "baumgarte", "alpha": alpha, "beta": beta})
+        }
+    }
+}
+
+/// The multiplier solve as summary.json and the plan give it.
+pub(crate) fn solver_json(scenario: &Scenario) -> Value {
+    match scenario.solver {
+        Solver::Cholesky => json!({"kind": "cholesky"}),
+        Solver::ConjugateGradient {
+            max_iterations,
+            tolerance,
+        } => json!({"kind": "cg", "max_iterations": max_iterations, "tolerance": tolerance}),
+    }
+}
+
 /// `divergence` in summary.json: where and when a run failed, as fields (the same as
 /// the `error` text).
 fn divergence(e: &Error) -> Value {
@@ -272,21 +296,8 @@ fn write_summary(
 ) -> Result<()> {
     let scenario = world.scenario();
     let error = failure.map(ToString::to_string);
-    let stabilizer = match scenario.stabilizer {
-        Stabilizer::Smc { mu, k, epsilon } => {
-            json!({"kind": "smc", "mu": mu, "k": k, "epsilon": epsilon})
-        }
-        Stabilizer::Baumgarte { alpha, beta } => {
-            json!({"kind": "baumgarte", "alpha": alpha, "beta": beta})
-        }
-    };
-    let solver = match scenario.solver {
-        Solver::Cholesky => json!({"kind": "cholesky"}),
-        Solver::ConjugateGradient {
-            max_iterations,
-            tolerance,
-        } => json!({"kind": "cg", "max_iterations": max_iterations, "tolerance": tolerance}),
-    };
+    let stabilizer = stabilizer_json(scenario);
+    let solver = solver_json(scenario);
     let sim_seconds = SimTime(outcome.steps * scenario.dt.0).as_secs_f64();
     let epochs = world.epochs();
     // Mean over the windows; a value that every window shares is reported as it is

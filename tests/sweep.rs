@@ -652,3 +652,40 @@ fn the_line_plot_averages_over_seed_axes_and_names_values_by_their_labels() {
     assert!(stderr.contains("axes[0].labels"), "{stderr}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `validate` on a sweep file checks every point and warns where a point's slot list
+/// never serves a channel (the run would diverge); the sweep itself still validates.
+#[test]
+fn validate_warns_about_a_slot_list_that_never_serves_a_channel() {
+    let dir = scratch("validate");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/tdma4_space_fixed.json");
+    let mut base: Value = serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    base["duration"] = json!(0.2);
+    base["measurement"]["period"] = json!(0.05);
+    std::fs::write(dir.join("tdma.json"), base.to_string()).unwrap();
+    let full = json!([{"node": 1, "channel": "tau1"}, {"node": 2, "channel": "tau2"},
+                      {"node": 2, "channel": "tau1"}, {"node": 3, "channel": "tau2"},
+                      {"node": 4, "channel": "tau1"}, {"node": 4, "channel": "tau2"}]);
+    let mut short = full.clone();
+    short.as_array_mut().unwrap().pop(); // node 4 never sends on tau2
+    let sweep = json!({
+        "name": "lists", "base": "tdma.json",
+        "axes": [{"name": "list", "pointer": "/network/slot_list", "values": [full, short],
+                  "labels": ["full", "no node 4 on tau2"]}]
+    });
+    let path = write_sweep(&dir, "lists.json", &sweep);
+    let o = dsmcosim(&[Path::new("validate"), &path]);
+    let (out, err) = (
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr),
+    );
+    assert!(o.status.success(), "{out}{err}");
+    assert!(out.contains("sweep lists of 2 points"), "{out}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("point p1 (list = no node 4 on tau2)")
+            && err.contains("never serves channel tau2"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -161,6 +161,50 @@ fn load(sweep_path: &Path) -> Result<Loaded> {
     })
 }
 
+/// What `dsmcosim validate` says about a sweep file: its points all validate, and
+/// which of them have a channel the network never serves.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Checked {
+    /// Sweep name.
+    pub name: String,
+    /// Points.
+    pub points: usize,
+    /// One line per point whose plan has a channel with no achieved period (a TDMA
+    /// slot list that leaves out one of its senders): such a run's delays grow without
+    /// bound and it usually diverges.
+    pub warnings: Vec<String>,
+}
+
+/// Checks the sweep in `sweep_path` as `sweep` does before it runs anything, and plans
+/// every point ([`crate::run::plan::plan`]) to find channels that are never served.
+pub fn check(sweep_path: &Path) -> Result<Checked> {
+    let loaded = load(sweep_path)?;
+    let mut warnings = Vec::new();
+    for p in &loaded.points {
+        let scenario = crate::scenario::parse_str(&p.text, &p.key)?;
+        let plan = crate::run::plan::plan(&scenario)?;
+        let never: Vec<&str> = plan
+            .channels
+            .iter()
+            .filter(|c| c.tau_achieved.is_none())
+            .map(|c| c.name.as_str())
+            .collect();
+        if !never.is_empty() {
+            warnings.push(format!(
+                "point p{} ({}): the slot list never serves channel {} (achieved τ infinite)",
+                p.index,
+                loaded.plan.describe(p.index),
+                never.join(", ")
+            ));
+        }
+    }
+    Ok(Checked {
+        name: loaded.plan.name.clone(),
+        points: loaded.points.len(),
+        warnings,
+    })
+}
+
 /// Runs the sweep defined in `sweep_path` into `out`; see the module docs of
 /// [`crate::sweep`].
 ///

@@ -26,7 +26,12 @@ fn an_override_runs_like_the_edited_file_and_is_kept() {
         a.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", said(&o));
-    let o = run(&["run", edited.to_str().unwrap(), "--out", b.to_str().unwrap()]);
+    let o = run(&[
+        "run",
+        edited.to_str().unwrap(),
+        "--out",
+        b.to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", said(&o));
     assert_eq!(summary(&a)["digest"], summary(&b)["digest"]);
     let kept: Value =
@@ -36,7 +41,11 @@ fn an_override_runs_like_the_edited_file_and_is_kept() {
 
     let o = run(&["validate", base.to_str().unwrap(), "--set", "/duration=0.5"]);
     assert!(o.status.success(), "{}", said(&o));
-    assert!(String::from_utf8_lossy(&o.stdout).contains("500 steps"), "{}", said(&o));
+    assert!(
+        String::from_utf8_lossy(&o.stdout).contains("500 steps"),
+        "{}",
+        said(&o)
+    );
 }
 
 #[test]
@@ -47,7 +56,10 @@ fn a_bad_override_exits_2_naming_it_and_writes_nothing() {
         ("/integrator=rk5", "integrator: unknown variant `rk5`"),
         ("/dt=-1", "dt"),
         ("/nope/x=1", "--set /nope/x=1: no /nope in the scenario"),
-        ("duration=1", "--set duration=1: the pointer must start with /"),
+        (
+            "duration=1",
+            "--set duration=1: the pointer must start with /",
+        ),
     ] {
         let out = dir.join("out");
         for cmd in ["validate", "run"] {
