@@ -26,12 +26,15 @@
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Mutex;
 use std::time::Instant;
 
 use rayon::prelude::*;
 
 use super::{check_into, parse_tolerance, sibling, Report, Verdict};
 use crate::error::{Error, Result};
+use crate::progress::Progress;
 use crate::scenario::Scenario;
 use crate::trace::compare::{Difference, Tolerance};
 
@@ -401,13 +404,29 @@ pub fn run(scenarios: &[PathBuf], options: &Options) -> Result<Batch> {
         }));
     }
 
+    // One bar over the scenarios (on a terminal, after a while), none per rerun,
+    // as a sweep does; a single scenario keeps its run's own bar.
+    let several = planned.len() > 1;
+    let progress = Mutex::new(Progress::with_unit(planned.len() as u64, "scenarios"));
+    let finished = AtomicU64::new(0);
     let outcomes = planned
         .into_par_iter()
-        .map(|p| match p {
-            Ok(job) => check_job(job, tolerance),
-            Err(outcome) => outcome,
+        .map(|p| {
+            let outcome = match p {
+                Ok(job) if several => crate::progress::quietly(|| check_job(job, tolerance)),
+                Ok(job) => check_job(job, tolerance),
+                Err(outcome) => outcome,
+            };
+            let n = finished.fetch_add(1, Ordering::Relaxed) + 1;
+            if let Ok(mut bar) = progress.lock() {
+                bar.tick(n);
+            }
+            outcome
         })
         .collect();
+    if let Ok(bar) = progress.lock() {
+        bar.finish();
+    }
     Ok(Batch {
         layout,
         against: against.clone(),
