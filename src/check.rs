@@ -299,16 +299,6 @@ pub fn check_into(
     Report::compare(stored, new, tolerance)
 }
 
-/// The `check` subcommand: the line to print on success, or [`Error::Mismatch`] with
-/// the explanation.
-pub fn execute(scenario: &Scenario, against: &Path, tolerance: Option<f64>) -> Result<String> {
-    let report = check(scenario, against, tolerance)?;
-    match report.verdict() {
-        Verdict::Match | Verdict::WithinTolerance => Ok(report.message()),
-        Verdict::Mismatch => Err(Error::Mismatch(report.message())),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

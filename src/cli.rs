@@ -88,8 +88,8 @@ pub enum Command {
     ///
     /// One scenario with a DIR that holds a summary.json: DIR is its stored run. Else
     /// (several scenarios, or a DIR without summary.json) each scenario's stored run is
-    /// DIR/<name>/, <name> being the scenario's `name` key (or, when only that exists,
-    /// DIR/<file stem>/): `dsmcosim check scenarios/*.json --against results/`.
+    /// DIR/<name>/, <name> being the scenario's `name` key (or DIR/<file stem>/ if only
+    /// that holds a run): `dsmcosim check scenarios/*.json --against results/`.
     /// Scenarios are rerun in parallel and reported in argument order; a missing stored
     /// run or a bad scenario does not stop the others.
     ///
@@ -396,17 +396,30 @@ pub fn execute(command: Command) -> crate::Result<()> {
                 work,
             };
             let batch = crate::check::batch::run(&scenarios, &options)?;
-            if let Some(path) = &junit {
-                write_report(path, &crate::check::junit::render(&batch))?;
+            let mut reports = Vec::new();
+            if let Some(path) = junit {
+                reports.push((path, crate::check::junit::render(&batch)));
             }
-            if let Some(path) = &json {
-                write_report(path, &crate::check::json::render(&batch))?;
+            if let Some(path) = json {
+                reports.push((path, crate::check::json::render(&batch)));
             }
             let (lines, result) = batch.conclude();
             for line in lines {
                 say!("{line}");
             }
-            result
+            // A report that cannot be written fails the command (exit 1) unless the check
+            // itself failed, whose exit code outranks it; the error is printed either way.
+            let mut written = Ok(());
+            for (path, text) in reports {
+                if let Err(e) = write_report(&path, &text) {
+                    if result.is_err() || written.is_err() {
+                        eprintln!("error: {e}");
+                    } else {
+                        written = Err(e);
+                    }
+                }
+            }
+            result.and(written)
         }
         Command::Tradeoff {
             scenario,

@@ -362,7 +362,7 @@ pub fn run(scenarios: &[PathBuf], options: &Options) -> Result<Batch> {
         let name = scenario.name.clone();
         if !is_plain_component(&name) {
             let e = Error::invalid(
-                format!("{}: name", file.display()),
+                "name",
                 format!("`{name}` cannot name a run directory (one path component, not . or ..)"),
             );
             planned.push(Err(failed(name, guess, None, e)));
@@ -384,10 +384,10 @@ pub fn run(scenarios: &[PathBuf], options: &Options) -> Result<Batch> {
         };
         if let Some(first) = rerun_dirs.get(&new) {
             let e = Error::invalid(
-                file.display().to_string(),
+                "name",
                 format!(
-                    "reruns into {}, as scenario `{first}` given before it does; give each \
-                     scenario once (scenario names must differ)",
+                    "reruns into {}, as the scenario `{first}` given before it does; give \
+                     each scenario once (scenario names must differ)",
                     new.display()
                 ),
             );

@@ -375,3 +375,31 @@ fn work_puts_the_reruns_elsewhere_and_leaves_nothing_beside_the_stored_runs() {
         work.join("short_mono").display().to_string()
     );
 }
+
+#[test]
+fn a_run_stored_under_the_file_stem_is_found_and_a_scenario_given_twice_is_refused() {
+    let (dir, files, stored) = stored_pair("check-many-stem");
+    // short_mono.json renamed inside, its run stored under the file stem.
+    let mut v: Value =
+        serde_json::from_str(&std::fs::read_to_string(&files[0]).expect("read")).expect("json");
+    v["name"] = Value::from("renamed_mono");
+    write_json(&dir, "short_mono.json", &v);
+    let o = check(&dir, &[&files[0], &files[1], &files[1]], &stored, &[]);
+    assert_eq!(o.status.code(), Some(2), "{}", said(&o));
+    let v = verdict(&dir);
+    assert_eq!(
+        statuses(&v),
+        [
+            ("renamed_mono", "match"),
+            ("short_space", "match"),
+            ("short_space", "error")
+        ]
+        .map(|(a, b)| (a.into(), b.into()))
+    );
+    assert_eq!(
+        v["scenarios"][0]["stored"],
+        stored.join("short_mono").display().to_string()
+    );
+    let message = v["scenarios"][2]["message"].as_str().unwrap_or("");
+    assert!(message.contains("give each scenario once"), "{message}");
+}
