@@ -32,6 +32,7 @@ use crate::trace::compare::{compare_dirs, DirComparison, Tolerance, REQUIRED_CSV
 pub mod batch;
 pub mod json;
 pub mod junit;
+pub mod outcome;
 
 /// What a run directory's `summary.json` says about the run.
 #[derive(Debug, Clone, PartialEq)]
