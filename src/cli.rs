@@ -88,13 +88,14 @@ pub enum Command {
     ///
     /// One scenario with a DIR that holds a summary.json: DIR is its stored run. Else
     /// (several scenarios, or a DIR without summary.json) each scenario's stored run is
-    /// DIR/<name>/, <name> being the scenario's `name` key (or DIR/<file stem>/ if only
-    /// that holds a run): `dsmcosim check scenarios/*.json --against results/`.
+    /// DIR/NAME/, NAME being the scenario's `name` key (or DIR/STEM/, STEM the file's
+    /// stem, if only that holds a run): `dsmcosim check scenarios/*.json --against
+    /// results/`.
     /// Scenarios are rerun in parallel and reported in argument order; a missing stored
     /// run or a bad scenario does not stop the others.
     ///
-    /// Each rerun goes beside its stored run, into <stored>.new (previous outputs there
-    /// are replaced), or into WORK/<name>/ with --work, and stays for inspection. The
+    /// Each rerun goes beside its stored run, into STORED.new (previous outputs there
+    /// are replaced), or into WORK/NAME/ with --work, and stays for inspection. The
     /// digests in both summary.json files are compared, then trace.csv, epochs.csv and
     /// any other CSV both runs have, record by record: exactly (equal text, i.e. equal
     /// bits) unless --tolerance is given. A mismatch prints the first differing record:
@@ -110,14 +111,14 @@ pub enum Command {
         #[arg(required = true, value_name = "SCENARIO")]
         scenarios: Vec<PathBuf>,
         /// A stored run (one scenario) or the directory of stored runs, one per scenario
-        /// name (as written by `dsmcosim run --out DIR/<name>`).
+        /// name (as written by `dsmcosim run --out DIR/NAME`).
         #[arg(long, value_name = "DIR")]
         against: PathBuf,
         /// Compare numbers relatively: |a − b| ≤ X·max(|a|, |b|). A run whose values all
         /// agree within X passes even if its digest differs.
         #[arg(long, value_name = "X", allow_negative_numbers = true)]
         tolerance: Option<f64>,
-        /// Rerun into WORK/<name>/ instead of beside the stored runs.
+        /// Rerun into WORK/NAME/ instead of beside the stored runs.
         #[arg(long, value_name = "WORK")]
         work: Option<PathBuf>,
         /// Write the verdict as JUnit XML (one testcase per scenario; a failure naming
