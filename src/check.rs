@@ -1,8 +1,13 @@
-//! `dsmcosim check SCENARIO --against DIR`: rerun a scenario beside a stored run and
-//! compare the two.
+//! `dsmcosim check SCENARIO… --against DIR`: rerun scenarios beside their stored runs
+//! and compare.
+//!
+//! This module compares one scenario with one stored run; [`batch`] checks many at once
+//! (each mapped to `DIR/<scenario name>/`, in parallel) and [`junit`] and [`json`] write
+//! the verdicts for CI.
 //!
 //! The new run goes to the sibling directory `DIR.new` (its previous outputs are
-//! replaced) and stays there for inspection. The verdict:
+//! replaced), or to a work directory of the caller's choice, and stays there for
+//! inspection. The verdict:
 //!
 //! 1. The digests in both `summary.json` files are compared (bit-for-bit over every
 //!    step, TDMA cycle and epoch row, see [`crate::trace::digest`]).
@@ -23,6 +28,11 @@ use serde_json::Value;
 use crate::error::{Error, Result};
 use crate::scenario::Scenario;
 use crate::trace::compare::{compare_dirs, DirComparison, Tolerance, REQUIRED_CSV};
+
+pub mod batch;
+pub mod json;
+pub mod junit;
+pub mod outcome;
 
 /// What a run directory's `summary.json` says about the run.
 #[derive(Debug, Clone, PartialEq)]
@@ -243,38 +253,51 @@ impl Report {
     }
 }
 
-/// Reruns `scenario` beside the stored run in `against` and compares (see the module
-/// docs). `tolerance`: `None` for an exact comparison, else the relative tolerance
-/// (finite, ≥ 0). The stored run is read before the rerun, so a missing one fails fast.
-pub fn check(scenario: &Scenario, against: &Path, tolerance: Option<f64>) -> Result<Report> {
-    let tolerance = match tolerance {
-        None => Tolerance::Exact,
-        Some(x) if x.is_finite() && x >= 0.0 => Tolerance::Relative(x),
-        Some(x) => {
-            return Err(Error::invalid(
-                "--tolerance",
-                format!("must be a finite number ≥ 0 (got {x})"),
-            ))
-        }
-    };
+/// The comparison rule for `--tolerance`: `None` for an exact comparison, else a
+/// relative tolerance, which must be finite and ≥ 0 (bad input otherwise).
+pub fn parse_tolerance(tolerance: Option<f64>) -> Result<Tolerance> {
+    match tolerance {
+        None => Ok(Tolerance::Exact),
+        Some(x) if x.is_finite() && x >= 0.0 => Ok(Tolerance::Relative(x)),
+        Some(x) => Err(Error::invalid(
+            "--tolerance",
+            format!("must be a finite number ≥ 0 (got {x})"),
+        )),
+    }
+}
+
+/// Reads the stored run in `against`: its summary and the presence of every required
+/// CSV file. A missing directory or file is an I/O error, a summary that is not a run
+/// summary bad input.
+pub fn read_stored(against: &Path) -> Result<RunSummary> {
     let stored = read_summary(against)?;
     for name in REQUIRED_CSV {
         let path = against.join(name);
         std::fs::metadata(&path).map_err(|e| Error::io(&path, e))?;
     }
-    let new_dir = sibling(against)?;
-    let new = rerun(scenario, &new_dir)?;
-    Report::compare(stored, new, tolerance)
+    Ok(stored)
 }
 
-/// The `check` subcommand: the line to print on success, or [`Error::Mismatch`] with
-/// the explanation.
-pub fn execute(scenario: &Scenario, against: &Path, tolerance: Option<f64>) -> Result<String> {
-    let report = check(scenario, against, tolerance)?;
-    match report.verdict() {
-        Verdict::Match | Verdict::WithinTolerance => Ok(report.message()),
-        Verdict::Mismatch => Err(Error::Mismatch(report.message())),
-    }
+/// Reruns `scenario` beside the stored run in `against` and compares (see the module
+/// docs). `tolerance`: `None` for an exact comparison, else the relative tolerance
+/// (finite, ≥ 0). The stored run is read before the rerun, so a missing one fails fast.
+pub fn check(scenario: &Scenario, against: &Path, tolerance: Option<f64>) -> Result<Report> {
+    let tolerance = parse_tolerance(tolerance)?;
+    let new_dir = sibling(against)?;
+    check_into(scenario, against, &new_dir, tolerance)
+}
+
+/// Like [`check`], with the new run written into `new_dir` instead of beside the
+/// stored run.
+pub fn check_into(
+    scenario: &Scenario,
+    against: &Path,
+    new_dir: &Path,
+    tolerance: Tolerance,
+) -> Result<Report> {
+    let stored = read_stored(against)?;
+    let new = rerun(scenario, new_dir)?;
+    Report::compare(stored, new, tolerance)
 }
 
 #[cfg(test)]

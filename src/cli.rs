@@ -1,5 +1,5 @@
 //! The command line: `dsmcosim validate FILE`, `dsmcosim run FILE --out DIR`,
-//! `dsmcosim check FILE --against DIR`, `dsmcosim sweep SWEEP --out DIR`, ….
+//! `dsmcosim check FILE… --against DIR`, `dsmcosim sweep SWEEP --out DIR`, ….
 //!
 //! Exit codes: 0 success, 1 I/O failure, 2 bad input (scenario or arguments),
 //! 3 a run that diverged or failed numerically, 4 `check` found a difference.
@@ -101,28 +101,55 @@ pub enum Command {
         #[arg(long, value_name = "S")]
         checkpoint_every: Option<f64>,
     },
-    /// Rerun a scenario and compare it with a stored run, bit for bit by default.
+    /// Rerun scenarios and compare each with its stored run, bit for bit by default.
     ///
-    /// Writes the new run beside the stored one, into DIR.new (its previous outputs
-    /// are replaced), and keeps it there for inspection. Compares the digests in both
-    /// summary.json files, then trace.csv, epochs.csv and any other CSV both runs have,
-    /// record by record: exactly (equal text, i.e. equal bits) unless --tolerance is
-    /// given. On a mismatch prints the first differing record: file, time, column,
-    /// stored and new value, absolute and relative difference.
+    /// One scenario with a DIR that holds a summary.json: DIR is its stored run. Else
+    /// (several scenarios, or a DIR without summary.json) each scenario's stored run is
+    /// DIR/NAME/, NAME being the scenario's `name` key (or DIR/STEM/, STEM the file's
+    /// stem, if only that holds a run): `dsmcosim check scenarios/*.json --against
+    /// results/`.
+    /// Scenarios are rerun in parallel and reported in argument order; a missing stored
+    /// run or a bad scenario does not stop the others.
     ///
-    /// Exit codes: 0 match (or within the tolerance), 4 mismatch, 1 stored run missing
-    /// or unreadable (DIR, summary.json, a CSV) or an I/O failure, 2 bad scenario, bad
-    /// --tolerance or a summary.json that is not a run summary.
+    /// Each rerun goes beside its stored run, into STORED.new (previous outputs there
+    /// are replaced), or into WORK/NAME/ with --work, and stays for inspection. The
+    /// digests in both summary.json files are compared, then trace.csv, epochs.csv and
+    /// any other CSV both runs have, record by record: exactly (equal text, i.e. equal
+    /// bits) unless --tolerance is given. A mismatch prints the first differing record:
+    /// file, time, column, stored and new value, absolute and relative difference.
+    ///
+    /// Exit codes: 0 every scenario matches (or is within the tolerance); else, by
+    /// precedence, 4 any mismatch, 1 any stored run missing or unreadable (DIR,
+    /// summary.json, a CSV) or an I/O failure (a report file included), 2 any bad
+    /// scenario, a summary.json that is not a run summary, two scenarios rerunning into
+    /// one directory, or a bad --tolerance (then nothing runs).
     Check {
-        /// Scenario file (JSON).
-        scenario: PathBuf,
-        /// Directory of the stored run (as written by `dsmcosim run --out DIR`).
+        /// Scenario files (JSON).
+        #[arg(required = true, value_name = "SCENARIO")]
+        scenarios: Vec<PathBuf>,
+        /// A stored run (one scenario) or the directory of stored runs, one per scenario
+        /// name (as written by `dsmcosim run --out DIR/NAME`).
         #[arg(long, value_name = "DIR")]
         against: PathBuf,
         /// Compare numbers relatively: |a − b| ≤ X·max(|a|, |b|). A run whose values all
         /// agree within X passes even if its digest differs.
         #[arg(long, value_name = "X", allow_negative_numbers = true)]
         tolerance: Option<f64>,
+        /// Rerun into WORK/NAME/ instead of beside the stored runs.
+        #[arg(long, value_name = "WORK")]
+        work: Option<PathBuf>,
+        /// Write the verdict as JUnit XML (one testcase per scenario; a failure naming
+        /// the first differing record, an error for a missing run or a bad scenario).
+        #[arg(long, value_name = "FILE")]
+        junit: Option<PathBuf>,
+        /// Write the verdict as JSON (per scenario: status match|mismatch|missing|error,
+        /// digests, first difference, wall seconds; and totals).
+        #[arg(long, value_name = "FILE")]
+        json: Option<PathBuf>,
+        /// Change a value of every scenario before its rerun (`POINTER=VALUE`, as for
+        /// `run`); repeatable.
+        #[arg(long = "set", value_name = "POINTER=VALUE")]
+        sets: Vec<String>,
     },
     /// Speed–accuracy study: turn dt, integrator, J_s solve, stabilizer (and ghosts,
     /// network on partitioned scenes) one at a time and measure each variant against a
@@ -324,6 +351,14 @@ fn is_sweep(path: &std::path::Path) -> bool {
         .is_some_and(|v| v.get("axes").is_some() && v.get("base").is_some())
 }
 
+/// Writes a report file atomically, creating its directory.
+fn write_report(path: &std::path::Path, text: &str) -> crate::Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        crate::output::create_dir_all(dir)?;
+    }
+    crate::output::write_atomic(path, text.as_bytes())
+}
+
 /// Runs one subcommand.
 pub fn execute(command: Command) -> crate::Result<()> {
     match command {
@@ -399,13 +434,45 @@ pub fn execute(command: Command) -> crate::Result<()> {
             Ok(())
         }
         Command::Check {
-            scenario,
+            scenarios,
             against,
             tolerance,
+            work,
+            junit,
+            json,
+            sets,
         } => {
-            let s = scenario::load(&scenario)?;
-            say!("{}", crate::check::execute(&s, &against, tolerance)?);
-            Ok(())
+            let options = crate::check::batch::Options {
+                against,
+                tolerance,
+                work,
+                sets,
+            };
+            let batch = crate::check::batch::run(&scenarios, &options)?;
+            let mut reports = Vec::new();
+            if let Some(path) = junit {
+                reports.push((path, crate::check::junit::render(&batch)));
+            }
+            if let Some(path) = json {
+                reports.push((path, crate::check::json::render(&batch)));
+            }
+            let (lines, result) = batch.conclude();
+            for line in lines {
+                say!("{line}");
+            }
+            // A report that cannot be written fails the command (exit 1) unless the check
+            // itself failed, whose exit code outranks it; the error is printed either way.
+            let mut written = Ok(());
+            for (path, text) in reports {
+                if let Err(e) = write_report(&path, &text) {
+                    if result.is_err() || written.is_err() {
+                        eprintln!("error: {e}");
+                    } else {
+                        written = Err(e);
+                    }
+                }
+            }
+            result.and(written)
         }
         Command::Tradeoff {
             scenario,

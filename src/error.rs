@@ -51,6 +51,16 @@ pub enum Error {
     /// first differing record.
     #[error("{0}")]
     Mismatch(String),
+    /// `dsmcosim check` of several scenarios: not all match. `message` counts the
+    /// outcomes; `code` is the exit code their precedence gives
+    /// ([`crate::check::batch::Batch::exit_code`]).
+    #[error("{message}")]
+    Checks {
+        /// The count line (`3 scenarios: 2 match, 1 mismatch`).
+        message: String,
+        /// Exit code: 4, 1, 2 (or 3).
+        code: u8,
+    },
 }
 
 /// Where and how a run diverged.
@@ -112,13 +122,15 @@ impl Error {
     }
 
     /// Process exit code: 2 for bad input, 3 for a diverged or numerically failed run,
-    /// 1 for I/O failures, 4 for a `check` that found a difference.
+    /// 1 for I/O failures, 4 for a `check` that found a difference; for a `check` of
+    /// several scenarios, the code their outcomes give.
     pub fn exit_code(&self) -> u8 {
         match self {
             Error::Parse { .. } | Error::Invalid { .. } => 2,
             Error::Diverged(_) | Error::Numerical { .. } => 3,
             Error::Io { .. } => 1,
             Error::Mismatch(_) => 4,
+            Error::Checks { code, .. } => *code,
         }
     }
 }

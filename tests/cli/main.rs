@@ -5,6 +5,7 @@ use std::process::{Command, Output};
 
 use serde_json::{json, Value};
 
+mod check;
 mod contract;
 mod limits;
 mod overrides;
