@@ -266,6 +266,15 @@ pub enum Command {
         #[arg(required = true, value_name = "SHARD_DIR")]
         shards: Vec<PathBuf>,
     },
+    /// Write the JSON Schemas of scenario and sweep files (scenario.schema.json,
+    /// sweep.schema.json) into DIR, generated from the types that read them; the
+    /// committed copies are in docs/schema/. A file may name its schema in a "$schema"
+    /// key for editors' completion.
+    Schema {
+        /// Output directory (created if missing).
+        #[arg(long, value_name = "DIR")]
+        out: PathBuf,
+    },
 }
 
 /// Entry point of the binary.
@@ -473,6 +482,12 @@ pub fn execute(command: Command) -> crate::Result<()> {
                 }
             }
             result.and(written)
+        }
+        Command::Schema { out } => {
+            for path in crate::schema::write(&out)? {
+                say!("wrote {}", path.display());
+            }
+            Ok(())
         }
         Command::Tradeoff {
             scenario,

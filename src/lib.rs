@@ -69,6 +69,7 @@ pub mod progress;
 pub mod report;
 pub mod run;
 pub mod scenario;
+pub mod schema;
 pub mod sweep;
 pub mod trace;
 pub mod tradeoff;

@@ -58,9 +58,13 @@ fn identity_quaternion() -> [f64; 4] {
 pub const MAX_DESCRIPTION_CHARS: usize = 4096;
 
 /// A whole scenario file (method §7 plus our own optional sections).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ScenarioFile {
+    /// The JSON Schema this file follows (`"$schema": "../docs/schema/scenario.schema.json"`),
+    /// for editors' completion and checks; optional, ignored by the tool.
+    #[serde(rename = "$schema", default, skip_serializing_if = "Option::is_none")]
+    pub schema: Option<String>,
     /// Scenario name, copied into summary.json; required, non-empty.
     pub name: String,
     /// What the scenario is for, in words (what its τ and latency mean, where it comes
@@ -130,7 +134,9 @@ pub struct ScenarioFile {
 }
 
 /// `integrator`: the time integrator of the `(x, v, z)` state.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum IntegratorFile {
     /// `"euler"`: explicit Euler; the default because the thesis uses it.
@@ -143,7 +149,9 @@ pub enum IntegratorFile {
 }
 
 /// `stabilizer.kind`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum StabilizerKind {
     /// `"smc"`: sliding-mode control (the thesis's method; the default).
@@ -158,7 +166,7 @@ pub enum StabilizerKind {
 ///
 /// Kept flat (rather than a serde-tagged enum) so that a bad value is reported with its
 /// full path (`stabilizer.mu`); validation rejects keys that belong to the other kind.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct StabilizerFile {
     /// Which stabilizer; required inside the section.
@@ -201,7 +209,9 @@ pub struct StabilizerFile {
 }
 
 /// `solver.kind`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum SolverKind {
     /// `"cholesky"`: exact sparse Cholesky (the default: no solver error to account for).
@@ -212,7 +222,7 @@ pub enum SolverKind {
 }
 
 /// `solver`: `{"kind": "cholesky"}` or `{"kind": "cg", "max_iterations", "tolerance"}`.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SolverFile {
     /// Which solver; required inside the section.
@@ -236,7 +246,9 @@ pub struct SolverFile {
 }
 
 /// `body_model`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum BodyModelFile {
     /// `"auto"` (default): point masses when every link anchor is at a body centre and
@@ -250,7 +262,7 @@ pub enum BodyModelFile {
 }
 
 /// `model`: exactly one of `grid`, or `bodies` (+ `links`).
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ModelFile {
     /// A generated `rows × cols` grid (method §3).
@@ -278,7 +290,7 @@ pub struct ModelFile {
 }
 
 /// `model.grid`: bodies on the z = 0 plane, linked to their 4-neighbours.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct GridFile {
     /// Number of rows (along y), ≥ 1.
@@ -294,7 +306,7 @@ pub struct GridFile {
 }
 
 /// One entry of `model.bodies`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct BodyFile {
     /// Body id, unique; used by links, forces and output, and in trace column names.
@@ -326,7 +338,7 @@ pub struct BodyFile {
 }
 
 /// One entry of `model.links`: a rigid distance link between two anchors.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct LinkFile {
     /// Id of body `a`.
@@ -351,7 +363,7 @@ pub struct LinkFile {
 
 /// One entry of `forces`: `amplitude · sin(omega · t + phase)` at the body centre for
 /// `from ≤ t < until`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ForceFile {
     /// Id of the driven body.
@@ -385,7 +397,7 @@ pub struct ForceFile {
 
 /// `forces[].ramp`: the amplitude is scaled by `a0` until `t0`, by `a1` from `t1`, and
 /// linearly in between (used to move a load smoothly from one body to another).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RampFile {
     /// Ramp start [s], ≥ 0.
@@ -403,7 +415,7 @@ fn default_max_violation() -> f64 {
 }
 
 /// `divergence`: when a run is declared diverged.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DivergenceFile {
     /// Stop when any link's `|w|` exceeds this [m], > 0; default 1 m: ten times the SMC
@@ -422,7 +434,7 @@ impl Default for DivergenceFile {
 }
 
 /// `measurement`: the cost measurement window.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MeasurementFile {
     /// Window length T [s], > 0, a whole number of `dt` steps, ≤ `duration`; default
@@ -442,7 +454,7 @@ fn default_decimation() -> u64 {
 }
 
 /// `output`: what goes into trace.csv and the plots.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct OutputFile {
     /// Keep every n-th step in trace.csv, ≥ 1; default 10 (1 kHz thesis steps become a
@@ -500,7 +512,7 @@ impl Default for OutputFile {
 ///
 /// Nodes are numbered from 1 in the file (node 0 is the TDMA server): the i-th list of
 /// `nodes` is node i + 1.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct PartitionFile {
     /// Body ids per node: every body in exactly one node, no node empty.
@@ -538,7 +550,9 @@ pub struct PartitionFile {
 }
 
 /// `partition.ghosts`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum GhostsFile {
     /// `"integrate"` (default): ghosts are integrated like own bodies between arrivals,
@@ -550,7 +564,7 @@ pub enum GhostsFile {
 }
 
 /// `partition.coupling`: a scheme's name, or an object when it takes parameters.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(untagged)]
 pub enum CouplingFile {
     /// `"reset"`, `"predict"` or `"passive"` (with its default tank).
@@ -566,7 +580,9 @@ impl Default for CouplingFile {
 }
 
 /// The coupling schemes by name.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum CouplingName {
     /// `"reset"`: every arriving state overwrites its ghost, every border force is held
@@ -581,7 +597,7 @@ pub enum CouplingName {
 }
 
 /// `partition.coupling` as an object.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct CouplingSpecFile {
     /// The scheme.
@@ -597,7 +613,7 @@ pub struct CouplingSpecFile {
 }
 
 /// One entry of `partition.link_owners`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct LinkOwnerFile {
     /// Link number (1-based, file order; a grid numbers its links row by row, each
@@ -608,7 +624,9 @@ pub struct LinkOwnerFile {
 }
 
 /// `network.kind`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum NetworkKind {
     /// `"ideal"` (default): each channel samples every τ and delivers after its
@@ -624,7 +642,7 @@ pub enum NetworkKind {
 ///
 /// Kept flat like [`StabilizerFile`] (a `kind` plus the keys of each kind, checked by
 /// validation), so that further network models add a variant and their keys here.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct NetworkFile {
     /// Which network model; required inside the section.
@@ -729,7 +747,9 @@ pub struct NetworkFile {
 }
 
 /// `network.sample` (TDMA): which sample a data frame carries.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum TdmaSample {
     /// The sender's state at the frame's start (data as old as the transmission).
@@ -741,7 +761,7 @@ pub enum TdmaSample {
 }
 
 /// `network.jitter`: `{"kind": "uniform", "max": s}` or `{"kind": "exponential", "mean": s}`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct JitterFile {
     /// Distribution.
@@ -763,7 +783,7 @@ pub struct JitterFile {
 }
 
 /// `network.jitter.kind`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum JitterKind {
     /// Uniform on `[0, max]`.
@@ -774,7 +794,7 @@ pub enum JitterKind {
 
 /// `network.slot_list[]`: `{"node": n, "channel": "name"}` (node 0 is the server,
 /// node n ≥ 1 the partition node n) or `{"idle": true}` for a slot nobody uses.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SlotEntryFile {
     /// Sending node.
@@ -801,7 +821,7 @@ pub struct SlotEntryFile {
 }
 
 /// `channels[].kinds` entries: what kind of data a channel carries.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum DataKindFile {
     /// `"state"`: body states `(x, ẋ)`, from a body's owner to the nodes ghosting it.
@@ -819,7 +839,7 @@ fn default_channel_k() -> f64 {
 }
 
 /// One entry of `channels`: a periodic channel (method §4).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ChannelFile {
     /// Channel name, unique, of letters, digits and `_` (it becomes part of CSV column
@@ -866,7 +886,9 @@ pub struct ChannelFile {
 }
 
 /// A controller method name.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum MethodFile {
     /// `"dsm"`: Dynamic Simplex Method (default).
@@ -883,7 +905,7 @@ pub enum MethodFile {
 }
 
 /// `controller.problem`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum ProblemKind {
     /// `"cp"`: constrained by the bandwidth budget.
@@ -893,7 +915,9 @@ pub enum ProblemKind {
 }
 
 /// `controller.measure`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum MeasureFile {
     /// `"lookahead"`: fork the world per candidate (default).
@@ -916,7 +940,7 @@ fn default_grid_step() -> f64 {
 }
 
 /// `controller.dsm`: the simplex (thesis values by default).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DsmFile {
     /// Simplex size D_s [s]; default 0.012 (thesis: 2 D_smin).
@@ -937,7 +961,7 @@ impl Default for DsmFile {
 }
 
 /// `controller`: delay optimization (method §5). Its period is `measurement.period`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ControllerFile {
     /// Method driving the live plant; default `"dsm"`.

@@ -10,9 +10,13 @@ use serde_json::Value;
 use crate::error::{Error, Result};
 
 /// A whole sweep file.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SweepFile {
+    /// The JSON Schema this file follows (`"$schema": "../../docs/schema/sweep.schema.json"`),
+    /// for editors' completion and checks; optional, ignored by the tool.
+    #[serde(rename = "$schema", default, skip_serializing_if = "Option::is_none")]
+    pub schema: Option<String>,
     /// Name of the sweep; point `i` is named `<name>_p<i>`. Required, not empty.
     pub name: String,
     /// The base scenario file, relative to the sweep file's directory (or absolute).
@@ -38,7 +42,9 @@ fn one() -> i64 {
 }
 
 /// How axes combine.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum Combine {
     /// Every combination of values; the last axis varies fastest.
@@ -49,7 +55,7 @@ pub enum Combine {
 }
 
 /// One swept field: exactly one of `values` and `range`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct AxisFile {
     /// Column name in `sweep.csv`: `[A-Za-z0-9_.-]`, unique.
@@ -69,7 +75,7 @@ pub struct AxisFile {
 }
 
 /// `steps` evenly spaced numbers from `from` to `to`, both included.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RangeFile {
     /// First value.

@@ -934,6 +934,7 @@ fn scenario() -> impl Strategy<Value = ScenarioFile> {
             let secs = |ns: u64| ns as f64 / 1e9;
             let (partition, channels) = partition_sections(partition_draw, &bodies, &links, dt_ns);
             ScenarioFile {
+                schema: None,
                 name: format!("random {seed}"),
                 description: None,
                 seed,
