@@ -19,11 +19,12 @@ use rayon::prelude::*;
 
 use super::dsm::{Dsm, DsmConfig};
 use super::nelder_mead::{NelderMead, NelderMeadConfig};
+use super::plant::{Plant, WindowSink};
 use super::problem::Delays;
-use crate::cosim::{CoSim, Observer};
 use crate::error::{Error, Result};
 use crate::kernel::SimTime;
 use crate::scenario::model::{ControllerSpec, Measure, Method};
+use crate::scenario::Scenario;
 
 /// A measured point of the delay space.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -104,7 +105,7 @@ impl Experiment {
 }
 
 /// Measures `x` on a fork of `world` over `[t, t_end)`.
-fn evaluate(world: &CoSim, delays: &Delays, x: &[f64], t: SimTime, t_end: SimTime) -> f64 {
+fn evaluate<P: Plant>(world: &P, delays: &Delays, x: &[f64], t: SimTime, t_end: SimTime) -> f64 {
     let Some(taus) = delays.taus(x) else {
         return f64::NAN;
     };
@@ -112,14 +113,20 @@ fn evaluate(world: &CoSim, delays: &Delays, x: &[f64], t: SimTime, t_end: SimTim
 }
 
 /// Measures every channel at delays `taus` [s] on a fork of `world` over `[t, t_end)`.
-fn evaluate_taus(world: &CoSim, delays: &Delays, taus: &[f64], t: SimTime, t_end: SimTime) -> f64 {
+fn evaluate_taus<P: Plant>(
+    world: &P,
+    delays: &Delays,
+    taus: &[f64],
+    t: SimTime,
+    t_end: SimTime,
+) -> f64 {
     let mut fork = world.clone();
     let Ok(achieved) = fork.set_taus(t, taus, &delays.achieved(taus)) else {
         return f64::INFINITY;
     };
-    match fork.advance_to(t_end, &mut ()) {
-        Ok(()) => match fork.epochs().last() {
-            Some(e) if e.t_end == t_end => delays.objective(e.cost, &achieved),
+    match fork.advance_unobserved(t_end) {
+        Ok(()) => match fork.last_window() {
+            Some((end, cost)) if end == t_end => delays.objective(cost, &achieved),
             _ => f64::INFINITY,
         },
         Err(_) => f64::INFINITY,
@@ -140,15 +147,15 @@ fn controller_error(e: impl std::fmt::Display) -> Error {
 
 /// Runs a controlled scenario to its end, recording the live world with `obs`; fills
 /// `exp` as windows complete (so a diverged run keeps what it measured).
-pub fn run(world: &mut CoSim, obs: &mut dyn Observer, exp: &mut Experiment) -> Result<()> {
-    let Some(mut controller) = Controller::new(world.scenario())? else {
-        return world.run_to_end(obs);
-    };
+pub fn run<P: Plant>(world: &mut P, obs: &mut P::Observer, exp: &mut Experiment) -> Result<()> {
     let end = world.scenario().duration;
+    let Some(mut controller) = Controller::new(world.scenario())? else {
+        return world.advance_to(end, obs);
+    };
     let result = controller.run_until(world, obs, end);
     *exp = controller.experiment.clone();
     result?;
-    world.run_to_end(obs)
+    world.advance_to(end, obs)
 }
 
 /// The controller's whole state between windows: the simplex searches and what was
@@ -211,10 +218,10 @@ impl Controller {
     }
 
     /// Decides and runs every window that starts before `stop`.
-    pub fn run_until(
+    pub fn run_until<P: Plant>(
         &mut self,
-        world: &mut CoSim,
-        obs: &mut dyn Observer,
+        world: &mut P,
+        obs: &mut P::Observer,
         stop: SimTime,
     ) -> Result<()> {
         let scenario = world.scenario().clone();
@@ -243,7 +250,7 @@ impl Controller {
         while t < scenario.duration && t < stop {
             let t_end = SimTime(t.0 + period.0).min(scenario.duration);
             world.advance_to(t, obs)?;
-            let live_world: &CoSim = world;
+            let live_world: &P = world;
             let eval = |x: &[f64]| evaluate(live_world, &delays, x, t, t_end);
             let surface_here = spec.surface_window == Some(t);
             let grid: Option<Vec<Candidate>> = (wants_grid || surface_here).then(|| {
@@ -357,8 +364,8 @@ impl Controller {
                     message: format!("the TDMA cycle cannot serve the decided delays: {e}"),
                 })?;
             let run = world.advance_to(t_end, obs);
-            let objective = match (&run, world.epochs().last()) {
-                (Ok(()), Some(e)) if e.t_end == t_end => delays.objective(e.cost, &achieved),
+            let objective = match (&run, world.last_window()) {
+                (Ok(()), Some((end, cost))) if end == t_end => delays.objective(cost, &achieved),
                 _ => f64::INFINITY,
             };
             if let (Method::Dsm, Measure::Online, Some(d)) =
@@ -412,7 +419,7 @@ pub fn channel_names(channels: &[crate::scenario::model::ChannelSpec]) -> Vec<St
     channels.iter().map(|c| c.name.clone()).collect()
 }
 
-/// The controller spec of a world, if any (for writers).
-pub fn spec(world: &CoSim) -> Option<&ControllerSpec> {
-    world.scenario().controller.as_ref()
+/// The controller spec of a scenario, if any (for writers).
+pub fn spec(scenario: &Scenario) -> Option<&ControllerSpec> {
+    scenario.controller.as_ref()
 }

@@ -58,6 +58,44 @@ pub trait Observer {
     fn on_window(&mut self, _report: &crate::control::experiment::WindowReport) {}
 }
 
+/// Every observer takes the controller's window reports through
+/// [`Observer::on_window`].
+impl<T: Observer + ?Sized> crate::control::WindowSink for T {
+    fn on_window(&mut self, report: &crate::control::experiment::WindowReport) {
+        Observer::on_window(self, report);
+    }
+}
+
+/// The co-simulation is the plant the delay controller steers.
+impl crate::control::Plant for CoSim {
+    type Observer = dyn Observer;
+
+    fn scenario(&self) -> &Scenario {
+        CoSim::scenario(self)
+    }
+
+    fn advance_to(&mut self, t: SimTime, obs: &mut (dyn Observer + 'static)) -> Result<()> {
+        CoSim::advance_to(self, t, obs)
+    }
+
+    fn advance_unobserved(&mut self, t: SimTime) -> Result<()> {
+        CoSim::advance_to(self, t, &mut ())
+    }
+
+    fn set_taus(
+        &mut self,
+        at: SimTime,
+        requested: &[f64],
+        achieved: &[SimTime],
+    ) -> std::result::Result<Vec<SimTime>, String> {
+        CoSim::set_taus(self, at, requested, achieved).map_err(|e| e.to_string())
+    }
+
+    fn last_window(&self) -> Option<(SimTime, f64)> {
+        self.epochs.last().map(|e| (e.t_end, e.cost))
+    }
+}
+
 /// A watcher that watches nothing.
 impl Observer for () {
     fn on_step(&mut self, _: &StepValues) -> std::io::Result<()> {

@@ -163,7 +163,7 @@ impl Live {
     }
 
     /// Runs to `t` (controlled: every window that starts before `t`), as `run` drives.
-    fn advance(&mut self, t: SimTime, obs: &mut dyn dsmcosim::cosim::Observer) {
+    fn advance(&mut self, t: SimTime, obs: &mut (dyn dsmcosim::cosim::Observer + 'static)) {
         let r = match &mut self.controller {
             Some(c) => c.run_until(&mut self.world, obs, t),
             None => self.world.advance_to(t, obs),
@@ -172,7 +172,10 @@ impl Live {
     }
 
     /// Runs to the end, as `run` drives.
-    fn run_to_end(&mut self, obs: &mut dyn dsmcosim::cosim::Observer) -> dsmcosim::Result<()> {
+    fn run_to_end(
+        &mut self,
+        obs: &mut (dyn dsmcosim::cosim::Observer + 'static),
+    ) -> dsmcosim::Result<()> {
         let end = self.world.scenario().duration;
         if let Some(c) = &mut self.controller {
             c.run_until(&mut self.world, obs, end)?;
