@@ -689,3 +689,97 @@ fn validate_warns_about_a_slot_list_that_never_serves_a_channel() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+mod hostile {
+    //! Sweep files legal or not, field by field and together (issue "Hardening"): every
+    //! one gets a verdict at once — the points, or an error naming a field — never a
+    //! panic, a hang or a huge allocation.
+
+    use proptest::prelude::*;
+    use serde_json::{json, Value};
+
+    fn value() -> impl Strategy<Value = Value> {
+        prop_oneof![
+            (-1e3f64..1e3).prop_map(|x| json!(x)),
+            Just(json!(0.005)),
+            Just(json!(1e-300)),
+            Just(json!(1e300)),
+            Just(json!("integrate")),
+            Just(json!("x")),
+            Just(json!([1, 2])),
+            Just(json!({"kind": "ideal"})),
+            Just(json!(null)),
+        ]
+    }
+
+    fn axis() -> impl Strategy<Value = Value> {
+        let pointer = prop_oneof![
+            Just("/channels/0/tau"),
+            Just("/seed"),
+            Just("/duration"),
+            Just("/partition/ghosts"),
+            Just("/network"),
+            Just("/nope/x"),
+            Just("channels"),
+            Just("/name"),
+            Just("/channels/7/tau"),
+        ];
+        let steps = prop_oneof![-2i64..4, Just(100_000), Just(100_001), Just(i64::MAX)];
+        (
+            pointer,
+            prop::collection::vec(value(), 0..4),
+            steps,
+            any::<bool>(),
+            prop::option::of(prop::collection::vec("[a-z ]{0,6}", 0..4)),
+        )
+            .prop_map(|(pointer, values, steps, range, labels)| {
+                let mut a = json!({"name": "a", "pointer": pointer});
+                if range {
+                    a["range"] = json!({"from": 0.001, "to": 0.01, "steps": steps});
+                } else {
+                    a["values"] = json!(values);
+                }
+                if let Some(l) = labels {
+                    a["labels"] = json!(l);
+                }
+                a
+            })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(128))]
+
+        #[test]
+        fn every_sweep_file_gets_a_verdict_at_once(
+            axes in prop::collection::vec(axis(), 0..4),
+            repeat in prop_oneof![Just(json!(1)), Just(json!(0)), Just(json!(3)), Just(json!(1_000_000)), Just(json!("2"))],
+            zip in any::<bool>(),
+        ) {
+            let start = std::time::Instant::now();
+            // Distinct axis names, so that the name rule is not all that is tested.
+            let axes: Vec<Value> = axes
+                .into_iter()
+                .enumerate()
+                .map(|(i, mut a)| {
+                    a["name"] = json!(format!("a{i}"));
+                    a
+                })
+                .collect();
+            let sweep = json!({
+                "name": "hostile", "base": "base.json", "repeat": repeat,
+                "combine": if zip { "zip" } else { "factorial" }, "axes": axes,
+            });
+            let dir = super::scratch(&format!("hostile-{}", std::thread::current().name().unwrap_or("t").len()));
+            let path = super::write_sweep(&dir, "s.json", &sweep);
+            match dsmcosim::sweep::check(&path) {
+                Ok(c) => prop_assert!(c.points >= 1 && c.points <= 100_000),
+                Err(e) => {
+                    let m = e.to_string();
+                    prop_assert_eq!(e.exit_code(), 2, "{}", m);
+                    prop_assert!(m.lines().count() == 1 && m.contains(": "), "{}", m);
+                }
+            }
+            prop_assert!(start.elapsed() < std::time::Duration::from_secs(5), "took {:?}", start.elapsed());
+        }
+    }
+}

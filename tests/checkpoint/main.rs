@@ -263,3 +263,53 @@ fn bad_checkpoints_are_clear_errors() {
         String::from_utf8_lossy(&o.stderr)
     );
 }
+
+/// A checkpoint whose carried trace lines were edited, and its hash recomputed, resumes
+/// to the same run digest (which covers the bits of every step, not the text of the
+/// rows) — but to a different `trace_digest`, which covers the bytes of trace.csv. So
+/// a resumed run vouches for its trace text through `trace_digest`.
+#[test]
+fn edited_trace_lines_in_a_checkpoint_change_the_trace_digest() {
+    let dir = scratch("tampered");
+    let mut v = shipped("grid16_monolithic");
+    v["duration"] = json!(2.0);
+    let s = parse_str(&v.to_string(), "tampered").expect("scenario");
+    let opts = RunOptions {
+        checkpoint_every: SimTime::from_secs_f64(1.0),
+        ..RunOptions::default()
+    };
+    let full = run_with(&s, &dir.join("full"), opts).expect("runs");
+    let cp = dir
+        .join("full/checkpoints")
+        .join(dsmcosim::checkpoint::file_name(
+            SimTime::from_secs_f64(1.0).unwrap(),
+        ));
+    let honest = resume(&cp, &dir.join("honest"), RunOptions::default()).expect("resumes");
+    assert_eq!(honest.digest, full.digest);
+    assert_eq!(honest.trace_digest, full.trace_digest);
+    assert!(full.trace_digest.is_some());
+
+    // Change one digit of the first data row the checkpoint carries, then re-hash.
+    let mut bytes = read(&cp);
+    let header = 16 + 4 + 32;
+    let body_start = header;
+    let row = b"\n0.1,";
+    let at = bytes[body_start..]
+        .windows(row.len())
+        .position(|w| w == row)
+        .map(|i| body_start + i + 1 + row.len())
+        .expect("a carried trace row at t = 0.1 s");
+    let digit = bytes[at..].iter().position(u8::is_ascii_digit).unwrap() + at;
+    bytes[digit] = if bytes[digit] == b'1' { b'2' } else { b'1' };
+    let hash = *blake3::hash(&bytes[header..]).as_bytes();
+    bytes[16 + 4..header].copy_from_slice(&hash);
+    let forged = dir.join("forged.ckpt");
+    std::fs::write(&forged, &bytes).unwrap();
+    let r = resume(&forged, &dir.join("forged"), RunOptions::default()).expect("resumes");
+    assert_eq!(
+        r.digest, full.digest,
+        "the run digest does not see the text"
+    );
+    assert_ne!(r.trace_digest, full.trace_digest, "the trace digest does");
+    assert!(read(&dir.join("forged/trace.csv")) != read(&dir.join("full/trace.csv")));
+}
