@@ -28,6 +28,30 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     file.commit()
 }
 
+/// CSV text (RFC 4180, `\n` line ends) of `rows` of already formatted fields, written
+/// with the `csv` crate: a field is quoted only if it holds a comma, a quote or a line
+/// break (`QuoteStyle::Necessary`). Numbers are formatted by the caller (Rust's
+/// shortest round-trip form, `format!("{x}")`), because the crate's own float
+/// formatting differs (`1.0` for `1`, `1e21` for `1000000000000000000000`) and stored
+/// files are compared byte for byte.
+pub fn csv_text<R, F>(rows: impl IntoIterator<Item = R>) -> String
+where
+    R: IntoIterator<Item = F>,
+    F: AsRef<[u8]>,
+{
+    let mut w = csv::WriterBuilder::new()
+        .quote_style(csv::QuoteStyle::Necessary)
+        .flexible(true)
+        .from_writer(Vec::new());
+    for row in rows {
+        // Writing into a Vec cannot fail.
+        let _ = w.write_record(row);
+    }
+    let bytes = w.into_inner().unwrap_or_default();
+    // Every field was a str, so the bytes are UTF-8.
+    String::from_utf8(bytes).unwrap_or_default()
+}
+
 /// Creates `path` and its missing parents, like [`std::fs::create_dir_all`], with the
 /// path in the error.
 pub fn create_dir_all(path: &Path) -> Result<()> {
@@ -180,6 +204,19 @@ mod tests {
             .collect();
         names.sort();
         names
+    }
+
+    #[test]
+    fn csv_text_quotes_only_where_needed() {
+        let rows = [
+            vec!["t", "label", "x"],
+            vec!["0.00001", "one, two", ""],
+            vec!["1e300", "say \"hi\"", "1"],
+        ];
+        assert_eq!(
+            csv_text(rows),
+            "t,label,x\n0.00001,\"one, two\",\n1e300,\"say \"\"hi\"\"\",1\n"
+        );
     }
 
     #[test]
