@@ -74,6 +74,12 @@ fn sci(x: f64) -> String {
     }
 }
 
+/// `tradeoff.md`. The table is written by hand rather than with `comfy-table` or
+/// `tabled`, for a measured reason: both (comfy-table 7 `ASCII_MARKDOWN`, tabled 0.20
+/// `Style::markdown()`) pad every cell to its column's width and write the rule as
+/// `|------|`, so every stored tradeoff.md would change bytes, and a row with a long
+/// error in `status` would widen every row; the unpadded `| a | b |` rows with a `|---|`
+/// rule render the same.
 fn markdown(study: &Study) -> String {
     let mut s = String::new();
     let r = &study.reference;
