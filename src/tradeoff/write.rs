@@ -25,7 +25,10 @@ fn num(x: f64) -> String {
     }
 }
 
-/// A CSV text field, quoted (errors contain commas).
+/// A CSV text field, quoted (errors contain commas). Always quoted, as the stored
+/// tradeoff.csv files have it; `csv::Writer` quotes per writer, not per field
+/// (`QuoteStyle::Necessary` would unquote `knob` and `setting` and change the stored
+/// bytes), so this table keeps its own writer.
 fn text(s: &str) -> String {
     format!("\"{}\"", s.replace('"', "\"\""))
 }
