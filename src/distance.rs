@@ -30,13 +30,15 @@ impl Trace {
     fn read(dir: &Path) -> Result<Trace> {
         let file = dir.join("trace.csv");
         let text = std::fs::read_to_string(&file).map_err(|e| Error::io(&file, e))?;
-        let mut lines = text.lines();
-        let header: Vec<String> = lines
-            .next()
-            .unwrap_or_default()
-            .split(',')
-            .map(str::to_string)
-            .collect();
+        let mut reader = csv::ReaderBuilder::new()
+            .has_headers(false)
+            .flexible(true)
+            .from_reader(text.as_bytes());
+        let mut records = reader.records();
+        let header: Vec<String> = match records.next() {
+            Some(Ok(r)) => r.iter().map(str::to_string).collect(),
+            _ => Vec::new(),
+        };
         if header.first().map(String::as_str) != Some("t") {
             return Err(Error::invalid(
                 file.display().to_string(),
@@ -44,14 +46,20 @@ impl Trace {
             ));
         }
         let mut rows = Vec::new();
-        for (i, line) in lines.enumerate() {
-            let row: std::result::Result<Vec<f64>, _> =
-                line.split(',').map(str::parse::<f64>).collect();
+        for (i, record) in records.enumerate() {
+            let line = record
+                .as_ref()
+                .ok()
+                .and_then(|r| r.position())
+                .map_or(i + 2, |p| p.line() as usize);
+            let row: Option<Vec<f64>> = record
+                .ok()
+                .and_then(|r| r.iter().map(|f| f.parse::<f64>().ok()).collect());
             match row {
-                Ok(r) if r.len() == header.len() => rows.push(r),
+                Some(r) if r.len() == header.len() => rows.push(r),
                 _ => {
                     return Err(Error::invalid(
-                        format!("{}:{}", file.display(), i + 2),
+                        format!("{}:{line}", file.display()),
                         format!("expected {} numbers", header.len()),
                     ))
                 }

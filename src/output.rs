@@ -1,18 +1,20 @@
 //! Atomic file output: every file a run writes appears whole or not at all.
 //!
-//! Bytes go to a temporary file beside the target (`.<name>.tmp.<pid>.<n>`, same
-//! directory so the final `rename` never crosses a file system), are flushed and
-//! `sync_all`ed, and only then renamed over the target. A crash or an error leaves at
-//! most a hidden temporary file, never a half-written `summary.json` or `trace.csv`;
-//! on an error we return, the temporary file is removed too.
+//! Bytes go to a temporary file beside the target (`.<name>.tmp.<pid>.<random>`, made
+//! by `tempfile` in the same directory so the final `rename` never crosses a file
+//! system), are flushed and `sync_all`ed, and only then renamed over the target
+//! ([`tempfile::NamedTempFile::persist`]). A crash or an error leaves at most a hidden
+//! temporary file, never a half-written `summary.json` or `trace.csv`; on an error we
+//! return, the temporary file is removed too (`tempfile` removes it on drop).
 //!
 //! I/O errors name the target path (not the temporary one), since that is the file the
 //! user asked for.
 
-use std::fs::{File, OpenOptions};
+use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
+
+use tempfile::NamedTempFile;
 
 use crate::error::{Error, Result};
 
@@ -24,6 +26,30 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let mut file = AtomicFile::create(path)?;
     file.write_all(bytes).map_err(|e| Error::io(path, e))?;
     file.commit()
+}
+
+/// CSV text (RFC 4180, `\n` line ends) of `rows` of already formatted fields, written
+/// with the `csv` crate: a field is quoted only if it holds a comma, a quote or a line
+/// break (`QuoteStyle::Necessary`). Numbers are formatted by the caller (Rust's
+/// shortest round-trip form, `format!("{x}")`), because the crate's own float
+/// formatting differs (`1.0` for `1`, `1e21` for `1000000000000000000000`) and stored
+/// files are compared byte for byte.
+pub fn csv_text<R, F>(rows: impl IntoIterator<Item = R>) -> String
+where
+    R: IntoIterator<Item = F>,
+    F: AsRef<[u8]>,
+{
+    let mut w = csv::WriterBuilder::new()
+        .quote_style(csv::QuoteStyle::Necessary)
+        .flexible(true)
+        .from_writer(Vec::new());
+    for row in rows {
+        // Writing into a Vec cannot fail.
+        let _ = w.write_record(row);
+    }
+    let bytes = w.into_inner().unwrap_or_default();
+    // Every field was a str, so the bytes are UTF-8.
+    String::from_utf8(bytes).unwrap_or_default()
 }
 
 /// Creates `path` and its missing parents, like [`std::fs::create_dir_all`], with the
@@ -41,47 +67,41 @@ pub fn create_dir_all(path: &Path) -> Result<()> {
 pub struct AtomicFile {
     /// The file the caller wants.
     path: PathBuf,
-    /// The temporary file the bytes go to until the commit.
-    tmp: PathBuf,
-    /// `None` only while committing or dropping.
-    writer: Option<BufWriter<File>>,
-    /// True until the rename succeeded: the temporary file is ours to remove.
-    armed: bool,
-}
-
-/// Distinguishes several temporary files for the same target within one process.
-static TMP_COUNTER: AtomicU64 = AtomicU64::new(0);
-
-/// The temporary path beside `path`: `.<name>.tmp.<pid>.<n>`.
-fn tmp_path(path: &Path) -> Result<PathBuf> {
-    let name = path.file_name().ok_or_else(|| {
-        Error::io(
-            path,
-            io::Error::new(io::ErrorKind::InvalidInput, "not a file name"),
-        )
-    })?;
-    let n = TMP_COUNTER.fetch_add(1, Ordering::Relaxed);
-    let mut tmp_name = std::ffi::OsString::from(".");
-    tmp_name.push(name);
-    tmp_name.push(format!(".tmp.{}.{}", std::process::id(), n));
-    Ok(path.with_file_name(tmp_name))
+    /// The temporary file the bytes go to until the commit; `None` only while
+    /// committing or dropping. Dropped unpersisted, `tempfile` removes it.
+    writer: Option<BufWriter<NamedTempFile>>,
 }
 
 impl AtomicFile {
-    /// Opens the temporary file beside `path` (the directory must exist).
+    /// Opens a temporary file beside `path` (the directory must exist):
+    /// `.<name>.tmp.<pid>.<random>`, which [`run_dir`] recognizes as a leftover.
     pub fn create(path: &Path) -> Result<AtomicFile> {
-        let tmp = tmp_path(path)?;
-        let file = OpenOptions::new()
-            .write(true)
-            .create(true)
-            .truncate(true)
-            .open(&tmp)
-            .map_err(|e| Error::io(path, e))?;
+        let name = path.file_name().ok_or_else(|| {
+            Error::io(
+                path,
+                io::Error::new(io::ErrorKind::InvalidInput, "not a file name"),
+            )
+        })?;
+        let mut prefix = std::ffi::OsString::from(".");
+        prefix.push(name);
+        prefix.push(format!(".tmp.{}.", std::process::id()));
+        let dir = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(&prefix).rand_bytes(8);
+        // The mode a plain `File::create` gives (0o666 less the umask), not tempfile's
+        // owner-only default: outputs are meant to be read by others as before.
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            builder.permissions(std::fs::Permissions::from_mode(0o666));
+        }
+        let file = builder.tempfile_in(dir).map_err(|e| Error::io(path, e))?;
         Ok(AtomicFile {
             path: path.to_path_buf(),
-            tmp,
             writer: Some(BufWriter::with_capacity(1 << 16, file)),
-            armed: true,
         })
     }
 
@@ -98,14 +118,13 @@ impl AtomicFile {
             .writer
             .take()
             .ok_or_else(|| Error::io(&path, io::Error::other("atomic file already committed")))?;
-        // `into_inner` flushes the buffer; on failure `self` drops and removes `tmp`.
+        // `into_inner` flushes the buffer; on failure the temporary file drops (removed).
         let file = writer
             .into_inner()
             .map_err(|e| Error::io(&path, e.into_error()))?;
-        file.sync_all().map_err(|e| Error::io(&path, e))?;
-        drop(file);
-        std::fs::rename(&self.tmp, &path).map_err(|e| Error::io(&path, e))?;
-        self.armed = false;
+        file.as_file().sync_all().map_err(|e| Error::io(&path, e))?;
+        // On failure the error carries the temporary file, which drops (removed).
+        file.persist(&path).map_err(|e| Error::io(&path, e.error))?;
         sync_parent_dir(&path);
         Ok(())
     }
@@ -157,12 +176,10 @@ impl Write for AtomicFile {
 impl Drop for AtomicFile {
     fn drop(&mut self) {
         if let Some(w) = self.writer.take() {
-            // Discard the buffer without writing it: the file is going away.
+            // Discard the buffer without writing it: the file is going away (dropping
+            // the `NamedTempFile` removes it).
             let (file, _unwritten) = w.into_parts();
             drop(file);
-        }
-        if self.armed {
-            let _ = std::fs::remove_file(&self.tmp);
         }
     }
 }
@@ -187,6 +204,19 @@ mod tests {
             .collect();
         names.sort();
         names
+    }
+
+    #[test]
+    fn csv_text_quotes_only_where_needed() {
+        let rows = [
+            vec!["t", "label", "x"],
+            vec!["0.00001", "one, two", ""],
+            vec!["1e300", "say \"hi\"", "1"],
+        ];
+        assert_eq!(
+            csv_text(rows),
+            "t,label,x\n0.00001,\"one, two\",\n1e300,\"say \"\"hi\"\"\",1\n"
+        );
     }
 
     #[test]

@@ -46,6 +46,8 @@ pub(super) fn fmt(x: f64) -> String {
     }
 }
 
+/// `coupling.md`; its table is written by hand for the reason given at
+/// `tradeoff::write::markdown` (the table crates pad cells, changing the stored bytes).
 pub(super) fn write_markdown(
     out: &Path,
     name: &str,

@@ -52,7 +52,9 @@ impl RunDir {
     }
 }
 
-/// Whether `name` is a temporary file of an atomic write (`.<name>.tmp.<pid>.<n>`).
+/// Whether `name` is a temporary file of an atomic write: `.<name>.tmp.<pid>.<n>`,
+/// `<n>` digits (what earlier versions wrote) or letters and digits (`tempfile`'s
+/// random part, what [`super::AtomicFile`] writes now).
 fn is_temporary(name: &str) -> bool {
     let Some(rest) = name.strip_prefix('.') else {
         return false;
@@ -63,7 +65,10 @@ fn is_temporary(name: &str) -> bool {
     let mut parts = tail.split('.');
     let numeric =
         |p: Option<&str>| p.is_some_and(|p| !p.is_empty() && p.bytes().all(|b| b.is_ascii_digit()));
-    numeric(parts.next()) && numeric(parts.next()) && parts.next().is_none()
+    let alphanumeric = |p: Option<&str>| {
+        p.is_some_and(|p| !p.is_empty() && p.bytes().all(|b| b.is_ascii_alphanumeric()))
+    };
+    numeric(parts.next()) && alphanumeric(parts.next()) && parts.next().is_none()
 }
 
 /// The scenario name of the run stored in `dir`, if it holds a readable summary.
@@ -149,6 +154,19 @@ mod tests {
     fn temporary_names_are_those_atomic_writes_use() {
         assert!(is_temporary(".trace.csv.tmp.4242.0"));
         assert!(is_temporary(".summary.json.tmp.1.17"));
+        assert!(is_temporary(".trace.csv.tmp.4242.aB3xYz9q"));
+        // The name an open atomic file really has.
+        let dir = std::env::temp_dir().join(format!("dsmcosim-tmpname-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let f = super::super::AtomicFile::create(&dir.join("trace.csv")).unwrap();
+        let names: Vec<String> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(names.len(), 1);
+        assert!(is_temporary(&names[0]), "{names:?}");
+        drop(f);
+        std::fs::remove_dir(&dir).unwrap();
         for name in [
             "trace.csv",
             ".trace.csv.tmp.x.0",
@@ -156,6 +174,7 @@ mod tests {
             "a.tmp.1.2",
             ".a.tmp.1.2.3",
             ".tmp.1.2x",
+            ".trace.csv.tmp.1.a-b",
         ] {
             assert!(!is_temporary(name), "{name}");
         }

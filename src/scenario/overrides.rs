@@ -15,6 +15,7 @@ use serde_json::Value;
 
 use super::model::Scenario;
 use crate::error::{Error, Result};
+use crate::sweep::pointer::Pointer;
 
 /// Most `--set` overrides on one command line.
 pub const MAX_OVERRIDES: usize = 1000;
@@ -60,41 +61,10 @@ pub fn apply(doc: &mut Value, set: &str) -> Result<()> {
     let (pointer, value) = set
         .split_once('=')
         .ok_or_else(|| bad("must be POINTER=VALUE, e.g. /channels/0/tau=0.004".into()))?;
-    if !pointer.starts_with('/') {
-        return Err(bad(format!(
-            "the pointer must start with / (got {pointer:?})"
-        )));
-    }
+    let pointer = Pointer::parse(pointer).map_err(bad)?;
     let value: Value =
         serde_json::from_str(value).unwrap_or_else(|_| Value::String(value.to_string()));
-    let (parent, last) = pointer.rsplit_once('/').unwrap_or(("", pointer));
-    let key = last.replace("~1", "/").replace("~0", "~");
-    let target = doc.pointer_mut(parent).ok_or_else(|| {
-        bad(format!(
-            "no {parent} in the scenario, so {pointer} has no parent"
-        ))
-    })?;
-    match target {
-        Value::Object(map) => {
-            map.insert(key, value);
-            Ok(())
-        }
-        Value::Array(items) => {
-            let len = items.len();
-            let slot = key
-                .parse::<usize>()
-                .ok()
-                .and_then(|i| items.get_mut(i))
-                .ok_or_else(|| {
-                    bad(format!(
-                        "{parent} is an array of {len}; the last token must be an index below {len}"
-                    ))
-                })?;
-            *slot = value;
-            Ok(())
-        }
-        _ => Err(bad(format!("{parent} is neither an object nor an array"))),
-    }
+    pointer.set(doc, value).map(|_| ()).map_err(bad)
 }
 
 #[cfg(test)]
@@ -121,10 +91,15 @@ mod tests {
         let mut doc = json!({"a": {"b": 1}, "list": [1]});
         for (set, want) in [
             ("/a/b", "must be POINTER=VALUE"),
-            ("a/b=1", "must start with /"),
-            ("/nope/b=1", "no /nope in the scenario"),
+            ("a/b=1", "must start with `/`"),
+            (
+                "/nope/b=1",
+                "no key `nope` in the top level, so the parent /nope does not exist",
+            ),
             ("/list/3=1", "an array of 1"),
-            ("/a/b/c=1", "neither an object nor an array"),
+            ("/list/+0=1", "no element `+0`"),
+            ("/a/b/c=1", "/a/b is a number, not an object or array"),
+            ("/a~2=1", "bad escape `~2`"),
         ] {
             let e = apply(&mut doc, set).unwrap_err().to_string();
             assert!(e.starts_with(&format!("--set {set}: ")), "{e}");

@@ -1,6 +1,10 @@
-//! RFC 6901 JSON pointers (`/channels/0/tau`) and setting a value through one.
+//! RFC 6901 JSON pointers (`/channels/0/tau`) and setting a value through one, for sweep
+//! axes and `--set` ([`crate::scenario::overrides`]).
 //!
-//! Setting needs the parent to exist. On an object the last key may be new (the
+//! The parent is resolved by `serde_json` ([`Value::pointer_mut`]); what is added here is
+//! the check of a pointer's syntax (serde_json takes a bad escape such as `~2` as text),
+//! setting a key that may be new, and, when the parent is missing, a message that names
+//! the first missing step. Setting needs the parent to exist. On an object the last key may be new (the
 //! scenario's validation then rejects a key it does not know, with its own message);
 //! on an array the last token must index an existing element (no appending).
 
@@ -105,49 +109,14 @@ impl Pointer {
             .tokens
             .split_last()
             .ok_or_else(|| format!("{}: addresses the whole scenario", self.text))?;
-        let mut cur = doc;
-        for (depth, token) in parents.iter().enumerate() {
-            let here = self.prefix(depth);
-            let here = if here.is_empty() {
-                "the top level"
-            } else {
-                &here
-            };
-            let missing = |what: String| {
-                format!(
-                    "{}: {what}, so the parent {} does not exist",
-                    self.text,
-                    self.prefix(parents.len())
-                )
-            };
-            cur = match cur {
-                Value::Object(map) => map
-                    .get_mut(token)
-                    .ok_or_else(|| missing(format!("no key `{token}` in {here}")))?,
-                Value::Array(items) => {
-                    let len = items.len();
-                    match index(token) {
-                        Some(i) if i < len => &mut items[i],
-                        _ => {
-                            return Err(missing(format!(
-                                "no element `{token}` in {here} (an array of {len})"
-                            )))
-                        }
-                    }
-                }
-                other => {
-                    return Err(missing(format!(
-                        "{here} is {}, not an object or array",
-                        kind(other)
-                    )))
-                }
-            };
-        }
-        let parent = self.prefix(parents.len());
-        let parent = if parent.is_empty() {
+        let parent_text = self.prefix(parents.len());
+        let parent = if parent_text.is_empty() {
             "the top level"
         } else {
-            &parent
+            &parent_text
+        };
+        let Some(cur) = doc.pointer_mut(&parent_text) else {
+            return Err(self.missing_parent(doc, parents.len()));
         };
         match cur {
             Value::Object(map) => Ok(map.insert(last.clone(), value).is_none()),
@@ -159,7 +128,8 @@ impl Pointer {
                         Ok(false)
                     }
                     _ => Err(format!(
-                        "{}: no element `{last}` in {parent} (an array of {len}; a sweep replaces elements, it does not append)",
+                        "{}: no element `{last}` in {parent} (an array of {len}; a pointer \
+                         replaces elements, it does not append)",
                         self.text
                     )),
                 }
@@ -170,6 +140,40 @@ impl Pointer {
                 kind(other)
             )),
         }
+    }
+
+    /// Why the parent (the first `depth` tokens) is not in `doc`: the first step that
+    /// is missing, as `<pointer>: no key `foo` in /network, so the parent /network/foo
+    /// does not exist`.
+    fn missing_parent(&self, doc: &Value, depth: usize) -> String {
+        let parent = self.prefix(depth);
+        for (k, token) in self.tokens[..depth].iter().enumerate() {
+            let here_text = self.prefix(k);
+            let Some(here_value) = doc.pointer(&here_text) else {
+                break;
+            };
+            if doc.pointer(&self.prefix(k + 1)).is_some() {
+                continue;
+            }
+            let here = if here_text.is_empty() {
+                "the top level"
+            } else {
+                &here_text
+            };
+            let what = match here_value {
+                Value::Object(_) => format!("no key `{token}` in {here}"),
+                Value::Array(items) => format!(
+                    "no element `{token}` in {here} (an array of {})",
+                    items.len()
+                ),
+                other => format!("{here} is {}, not an object or array", kind(other)),
+            };
+            return format!(
+                "{}: {what}, so the parent {parent} does not exist",
+                self.text
+            );
+        }
+        format!("{}: the parent {parent} does not exist", self.text)
     }
 }
 

@@ -14,31 +14,21 @@
 //!
 //! Wall time is not in `sweep.csv` (which is a pure function of the sweep and the
 //! binary); it is in `timing.csv` (`index,wall_seconds`).
+//!
+//! Both are written with the `csv` crate (text fields quoted only where needed); the
+//! numbers are formatted here, see [`csv_text`].
 
 use std::collections::BTreeSet;
 
 use super::points::Plan;
 use super::record::Record;
+use crate::output::csv_text;
 
 /// A number field: shortest round-trip form, empty for none.
 fn num(x: Option<f64>) -> String {
     match x {
         Some(x) if x.is_finite() => format!("{x}"),
         _ => String::new(),
-    }
-}
-
-/// A CSV-quoted text field.
-fn quoted(s: &str) -> String {
-    format!("\"{}\"", s.replace('"', "\"\""))
-}
-
-/// A text field, quoted only if it needs to be.
-fn text(s: &str) -> String {
-    if s.contains([',', '"', '\n', '\r']) {
-        quoted(s)
-    } else {
-        s.to_string()
     }
 }
 
@@ -79,25 +69,24 @@ pub fn sweep_csv(plan: &Plan, records: &[Record]) -> String {
         header.push(format!("tau_{c}_achieved"));
     }
     header.extend(["bandwidth", "digest"].map(String::from));
-    let mut s = header.iter().map(|h| text(h)).collect::<Vec<_>>().join(",");
-    s.push('\n');
+    let mut rows = vec![header];
     for r in records {
         let row = &r.row;
         let mut f = vec![r.index.to_string(), plan.key(r.index)];
         let idx = &plan.points[r.index];
-        f.extend(plan.axes.iter().zip(idx).map(|(a, &v)| text(&a.label(v))));
+        f.extend(plan.axes.iter().zip(idx).map(|(a, &v)| a.label(v)));
         if plan.repeat > 1 {
             f.push(plan.rep(r.index).to_string());
         }
         f.push(r.seed.to_string());
-        f.push(text(&row.status));
+        f.push(row.status.clone());
         let d = row.divergence.as_ref();
         f.push(num(d.and_then(|d| d.time)));
         f.push(
             d.and_then(|d| d.node)
                 .map_or(String::new(), |n| n.to_string()),
         );
-        f.push(text(d.and_then(|d| d.place.as_deref()).unwrap_or_default()));
+        f.push(d.and_then(|d| d.place.clone()).unwrap_or_default());
         f.push(num(row.mean_cost));
         f.extend(
             methods
@@ -111,20 +100,19 @@ pub fn sweep_csv(plan: &Plan, records: &[Record]) -> String {
             f.push(num(c.and_then(|c| c.tau_achieved)));
         }
         f.push(num(row.bandwidth));
-        f.push(text(&row.digest));
-        s.push_str(&f.join(","));
-        s.push('\n');
+        f.push(row.digest.clone());
+        rows.push(f);
     }
-    s
+    csv_text(rows)
 }
 
 /// `timing.csv`: `index,wall_seconds` per record.
 pub fn timing_csv(records: &[Record]) -> String {
-    let mut s = String::from("index,wall_seconds\n");
-    for r in records {
-        s.push_str(&format!("{},{}\n", r.index, num(Some(r.wall_seconds))));
-    }
-    s
+    let header = ["index".to_string(), "wall_seconds".to_string()];
+    let rows = records
+        .iter()
+        .map(|r| [r.index.to_string(), num(Some(r.wall_seconds))]);
+    csv_text(std::iter::once(header).chain(rows))
 }
 
 #[cfg(test)]

@@ -2,7 +2,8 @@
 //! regression test).
 //!
 //! Generic over the columns: a file is a header line and rows of comma-separated
-//! values; the record's time is its `t` column, else its `t_start` column, else its
+//! values (RFC 4180, read with the `csv` crate, so a quoted text field may hold a comma);
+//! the record's time is its `t` column, else its `t_start` column, else its
 //! first column. So traces and epoch tables of every scenario kind compare alike,
 //! including columns added later.
 //!
@@ -226,10 +227,10 @@ pub fn compare_csv(file: &str, stored: &str, new: &str, tol: Tolerance) -> FileC
             kind,
         })
     };
-    let mut s_lines = stored.lines();
-    let mut n_lines = new.lines();
-    let s_head: Vec<&str> = s_lines.next().unwrap_or("").split(',').collect();
-    let n_head: Vec<&str> = n_lines.next().unwrap_or("").split(',').collect();
+    let mut s_lines = records(stored);
+    let mut n_lines = records(new);
+    let s_head = s_lines.next().unwrap_or_default();
+    let n_head = n_lines.next().unwrap_or_default();
     if s_head != n_head {
         let column = s_head
             .iter()
@@ -238,19 +239,19 @@ pub fn compare_csv(file: &str, stored: &str, new: &str, tol: Tolerance) -> FileC
             .unwrap_or(s_head.len().min(n_head.len()));
         out.difference = diff(DifferenceKind::Header {
             column: column + 1,
-            stored: s_head.get(column).map(|s| s.to_string()),
-            new: n_head.get(column).map(|s| s.to_string()),
+            stored: s_head.get(column).map(str::to_string),
+            new: n_head.get(column).map(str::to_string),
         });
         return out;
     }
     let time_col = ["t", "t_start"]
         .iter()
-        .find_map(|name| s_head.iter().position(|h| h == name))
+        .find_map(|name| s_head.iter().position(|h| h == *name))
         .unwrap_or(0);
-    let record = |row: usize, fields: &[&str]| Record {
+    let record = |row: usize, fields: &csv::StringRecord| Record {
         row,
-        time_column: s_head[time_col].to_string(),
-        time: fields.get(time_col).unwrap_or(&"").to_string(),
+        time_column: s_head.get(time_col).unwrap_or_default().to_string(),
+        time: fields.get(time_col).unwrap_or_default().to_string(),
     };
     let mut row = 0;
     loop {
@@ -259,21 +260,19 @@ pub fn compare_csv(file: &str, stored: &str, new: &str, tol: Tolerance) -> FileC
             (None, None) => return out,
             (Some(s), Some(n)) => (s, n),
             (s, n) => {
-                let extra: Vec<&str> = s.or(n).unwrap_or("").split(',').collect();
-                let count = |first: Option<&str>, rest: std::str::Lines| {
-                    row + usize::from(first.is_some()) + rest.count()
-                };
+                let more = |first: &Option<csv::StringRecord>| usize::from(first.is_some());
+                let stored_rows = row + more(&s) + s_lines.count();
+                let new_rows = row + more(&n) + n_lines.count();
+                let extra = s.or(n).unwrap_or_default();
                 out.difference = diff(DifferenceKind::Rows {
-                    stored: count(s, s_lines),
-                    new: count(n, n_lines),
+                    stored: stored_rows,
+                    new: new_rows,
                     first_extra: record(row + 1, &extra),
                 });
                 return out;
             }
         };
         row += 1;
-        let s: Vec<&str> = s.split(',').collect();
-        let n: Vec<&str> = n.split(',').collect();
         if s.len() != n.len() {
             out.difference = diff(DifferenceKind::Fields {
                 at: record(row, &s),
@@ -308,7 +307,7 @@ pub fn compare_csv(file: &str, stored: &str, new: &str, tol: Tolerance) -> FileC
             if !agree {
                 out.difference = diff(DifferenceKind::Value {
                     at: record(row, &s),
-                    column: s_head.get(c).unwrap_or(&"?").to_string(),
+                    column: s_head.get(c).unwrap_or("?").to_string(),
                     stored: a.to_string(),
                     new: b.to_string(),
                     abs,
@@ -320,6 +319,19 @@ pub fn compare_csv(file: &str, stored: &str, new: &str, tol: Tolerance) -> FileC
         }
         out.rows = row;
     }
+}
+
+/// The records of CSV `text` (the header first): every row, of any length (a row with
+/// a different field count is a difference, not a parse error). Reading stops at the
+/// first malformed row (invalid UTF-8 cannot occur in a `&str`), which then counts as
+/// the end of the file.
+fn records(text: &str) -> impl Iterator<Item = csv::StringRecord> + '_ {
+    csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .from_reader(text.as_bytes())
+        .into_records()
+        .map_while(|r| r.ok())
 }
 
 /// Compares the CSV files of a stored run directory with a new one: [`REQUIRED_CSV`]
@@ -499,6 +511,22 @@ mod tests {
                 ..
             }
         ));
+    }
+
+    #[test]
+    fn quoted_fields_may_hold_commas() {
+        let a = "t,label,x\n0,\"one, two\",1\n";
+        let b = "t,label,x\n0,\"one, two\",2\n";
+        assert!(compare_csv("sweep.csv", a, a, Tolerance::Exact)
+            .difference
+            .is_none());
+        let d = compare_csv("sweep.csv", a, b, Tolerance::Exact)
+            .difference
+            .unwrap();
+        match d.kind {
+            DifferenceKind::Value { column, .. } => assert_eq!(column, "x"),
+            other => panic!("{other:?}"),
+        }
     }
 
     #[test]

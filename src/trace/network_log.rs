@@ -7,9 +7,9 @@
 //! `static` (protocol: `info` says which list fragment it broadcasts or which list it
 //! confirms) or `data` (`channel` names the channel). Rows of every
 //! `network_decimation`-th cycle are written, and every lost frame and every cycle in
-//! which a list goes into force whatever the decimation.
+//! which a list goes into force whatever the decimation. Rows are written with the `csv`
+//! crate ([`crate::output::csv_text`]); the numbers and times are formatted here.
 
-use std::fmt::Write as _;
 use std::io::Write as _;
 
 use crate::kernel::SimTime;
@@ -111,14 +111,14 @@ impl NetworkLog {
         self.lost += lost as u64;
         self.keep_for_timeline(report, lost > 0);
         let every = report.cycle.is_multiple_of(self.decimation) || report.switch.is_some();
-        let mut text = String::new();
-        for f in &report.frames {
-            if every || f.lost() {
-                self.row(&mut text, f);
-            }
-        }
-        if !text.is_empty() {
-            self.write(&text)?;
+        let rows: Vec<[String; 12]> = report
+            .frames
+            .iter()
+            .filter(|f| every || f.lost())
+            .map(|f| self.row(f))
+            .collect();
+        if !rows.is_empty() {
+            self.write(&crate::output::csv_text(rows))?;
         }
         Ok(())
     }
@@ -136,7 +136,8 @@ impl NetworkLog {
         }
     }
 
-    fn row(&self, out: &mut String, f: &Transmission) {
+    /// The fields of `f`'s row.
+    fn row(&self, f: &Transmission) -> [String; 12] {
         let (kind, channel, info) = match f.kind {
             FrameKind::Sync => ("sync", "", String::new()),
             FrameKind::Static {
@@ -161,23 +162,24 @@ impl NetworkLog {
                 String::new(),
             ),
         };
-        let _ = write!(
-            out,
-            "{},{},{},{kind},{channel},{},{},{},",
-            f.cycle,
-            f.slot,
-            f.sender,
-            f.bytes,
+        let (delivery, lost, latency) = match (f.delivery, f.latency()) {
+            (Some(d), Some(l)) => (secs(d), "0", secs(l)),
+            _ => (String::new(), "1", String::new()),
+        };
+        [
+            f.cycle.to_string(),
+            f.slot.to_string(),
+            f.sender.to_string(),
+            kind.to_string(),
+            channel.to_string(),
+            f.bytes.to_string(),
             secs(f.nominal),
-            secs(f.start)
-        );
-        match (f.delivery, f.latency()) {
-            (Some(d), Some(l)) => {
-                let _ = write!(out, "{},0,{}", secs(d), secs(l));
-            }
-            _ => out.push_str(",1,"),
-        }
-        let _ = writeln!(out, ",{info}");
+            secs(f.start),
+            delivery,
+            lost.to_string(),
+            latency,
+            info,
+        ]
     }
 
     fn write(&mut self, text: &str) -> std::io::Result<()> {

@@ -25,7 +25,10 @@ fn num(x: f64) -> String {
     }
 }
 
-/// A CSV text field, quoted (errors contain commas).
+/// A CSV text field, quoted (errors contain commas). Always quoted, as the stored
+/// tradeoff.csv files have it; `csv::Writer` quotes per writer, not per field
+/// (`QuoteStyle::Necessary` would unquote `knob` and `setting` and change the stored
+/// bytes), so this table keeps its own writer.
 fn text(s: &str) -> String {
     format!("\"{}\"", s.replace('"', "\"\""))
 }
@@ -74,6 +77,12 @@ fn sci(x: f64) -> String {
     }
 }
 
+/// `tradeoff.md`. The table is written by hand rather than with `comfy-table` or
+/// `tabled`, for a measured reason: both (comfy-table 7 `ASCII_MARKDOWN`, tabled 0.20
+/// `Style::markdown()`) pad every cell to its column's width and write the rule as
+/// `|------|`, so every stored tradeoff.md would change bytes, and a row with a long
+/// error in `status` would widen every row; the unpadded `| a | b |` rows with a `|---|`
+/// rule render the same.
 fn markdown(study: &Study) -> String {
     let mut s = String::new();
     let r = &study.reference;

@@ -55,10 +55,14 @@ fn a_bad_override_exits_2_naming_it_and_writes_nothing() {
     for (set, want) in [
         ("/integrator=rk5", "integrator: unknown variant `rk5`"),
         ("/dt=-1", "dt"),
-        ("/nope/x=1", "--set /nope/x=1: no /nope in the scenario"),
+        (
+            "/nope/x=1",
+            "--set /nope/x=1: /nope/x: no key `nope` in the top level, so the parent /nope \
+             does not exist",
+        ),
         (
             "duration=1",
-            "--set duration=1: the pointer must start with /",
+            "--set duration=1: duration: must start with `/`",
         ),
     ] {
         let out = dir.join("out");
