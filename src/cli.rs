@@ -301,6 +301,9 @@ pub struct LimitArgs {
     /// Most checkpoints the run may write.
     #[arg(long, value_name = "N", default_value_t = crate::run::budget::DEFAULT_MAX_CHECKPOINTS)]
     max_checkpoints: u64,
+    /// Most bytes of memory the run may need (estimated before the run).
+    #[arg(long, value_name = "BYTES", default_value_t = crate::run::budget::DEFAULT_MAX_MEMORY_BYTES)]
+    max_memory: u64,
 }
 
 impl LimitArgs {
@@ -309,6 +312,7 @@ impl LimitArgs {
             max_steps: self.max_steps,
             max_output_bytes: self.max_output,
             max_checkpoints: self.max_checkpoints,
+            max_memory_bytes: self.max_memory,
         }
     }
 }

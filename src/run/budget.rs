@@ -19,6 +19,20 @@ pub const DEFAULT_MAX_STEPS: u64 = 10_000_000_000;
 pub const DEFAULT_MAX_OUTPUT_BYTES: u64 = 10_000_000_000;
 /// Default bound on the checkpoints one run writes (`--max-checkpoints` lifts it).
 pub const DEFAULT_MAX_CHECKPOINTS: u64 = 1_000;
+/// Default bound on the estimated peak memory [bytes] (`--max-memory` lifts it): 16 GB.
+pub const DEFAULT_MAX_MEMORY_BYTES: u64 = 16_000_000_000;
+/// Peak resident memory of a run before any body [bytes] (measured: 6.3 MB for a 16×16
+/// grid).
+pub const MEMORY_BASE: u64 = 6_000_000;
+/// Peak resident memory per body [bytes], state, workspaces and the CG solve: the slope
+/// of measured peaks (`/usr/bin/time -f %M`, monolithic grids, CG 10, 10 steps): 16.7 MB
+/// at 64×64, 51.2 MB at 128×128, 186.7 MB at 256×256, i.e. 2.8 kB per body; rounded up.
+pub const MEMORY_PER_BODY: u64 = 3_000;
+/// Memory per entry of the exact solve's factor bound [bytes]: the sparse Cholesky
+/// factorizes `J M⁻¹ Jᵀ` in link order, and its fill stays within the matrix's profile
+/// (row `k` from its first non-zero column to the diagonal). Measured peaks above the CG
+/// path's, per profile entry: 27.7 (64×64), 25.5 (128×128), 24.5 (256×256); rounded up.
+pub const BYTES_PER_FACTOR_ENTRY: u64 = 32;
 
 /// Limits a run is checked against.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -29,6 +43,8 @@ pub struct Limits {
     pub max_output_bytes: u64,
     /// Most checkpoints written.
     pub max_checkpoints: u64,
+    /// Most estimated peak memory [bytes].
+    pub max_memory_bytes: u64,
 }
 
 impl Default for Limits {
@@ -37,6 +53,7 @@ impl Default for Limits {
             max_steps: DEFAULT_MAX_STEPS,
             max_output_bytes: DEFAULT_MAX_OUTPUT_BYTES,
             max_checkpoints: DEFAULT_MAX_CHECKPOINTS,
+            max_memory_bytes: DEFAULT_MAX_MEMORY_BYTES,
         }
     }
 }
@@ -54,6 +71,31 @@ pub struct Estimate {
     pub trace_bytes: u64,
     /// Checkpoints written (with `--checkpoint-every`).
     pub checkpoints: u64,
+    /// Entries of the exact solve's factor bound (0 on the CG path and for small
+    /// systems, which use a dense factor).
+    pub factor_entries: u64,
+    /// Estimated peak memory [bytes]: [`MEMORY_BASE`], [`MEMORY_PER_BODY`] per body and
+    /// [`BYTES_PER_FACTOR_ENTRY`] per factor entry.
+    pub memory_bytes: u64,
+}
+
+/// The profile of `J M⁻¹ Jᵀ` in link order: for each link `k`, `k − f_k + 1` where `f_k`
+/// is the lowest link sharing a body with it (or `k`). The natural-order Cholesky
+/// factor's fill stays within it. A partitioned run's nodes factor sub-matrices in the
+/// same order, whose profiles are no larger.
+fn profile(scenario: &Scenario) -> u64 {
+    let mut lowest = vec![usize::MAX; scenario.bodies.len()];
+    for (k, l) in scenario.links.iter().enumerate() {
+        for b in [l.a, l.b] {
+            lowest[b] = lowest[b].min(k);
+        }
+    }
+    scenario
+        .links
+        .iter()
+        .enumerate()
+        .map(|(k, l)| (k - lowest[l.a].min(lowest[l.b]) + 1) as u64)
+        .sum()
 }
 
 impl Estimate {
@@ -71,12 +113,24 @@ impl Estimate {
         let checkpoints = checkpoint_every
             .filter(|e| e.0 > 0)
             .map_or(0, |e| scenario.duration.0 / e.0);
+        let exact = matches!(scenario.solver, crate::scenario::model::Solver::Cholesky);
+        let factor_entries =
+            if exact && scenario.links.len() > crate::multibody::solver::DENSE_MAX_LINKS {
+                profile(scenario)
+            } else {
+                0
+            };
+        let memory_bytes = MEMORY_BASE
+            .saturating_add(MEMORY_PER_BODY.saturating_mul(scenario.bodies.len() as u64))
+            .saturating_add(BYTES_PER_FACTOR_ENTRY.saturating_mul(factor_entries));
         Estimate {
             steps,
             trace_rows,
             trace_columns,
             trace_bytes,
             checkpoints,
+            factor_entries,
+            memory_bytes,
         }
     }
 
@@ -100,6 +154,32 @@ impl Estimate {
                      limit of {} bytes (raise output.decimation, trace fewer bodies, or \
                      --max-output)",
                     self.trace_bytes, self.trace_rows, self.trace_columns, limits.max_output_bytes
+                ),
+            ));
+        }
+        if self.memory_bytes > limits.max_memory_bytes {
+            let cg = self.memory_bytes - BYTES_PER_FACTOR_ENTRY.saturating_mul(self.factor_entries);
+            let hint = if self.factor_entries > 0 {
+                format!(
+                    "; the exact solve's factor alone is up to {} entries — `\"solver\": \
+                     {{\"kind\": \"cg\"}}` needs about {} MB",
+                    self.factor_entries,
+                    cg.div_ceil(1_000_000)
+                )
+            } else {
+                String::new()
+            };
+            return Err(Error::invalid(
+                if self.factor_entries > 0 {
+                    "solver"
+                } else {
+                    "model"
+                },
+                format!(
+                    "a run needs about {} MB of memory, above the limit of {} MB{hint} (or \
+                     raise --max-memory)",
+                    self.memory_bytes.div_ceil(1_000_000),
+                    limits.max_memory_bytes / 1_000_000
                 ),
             ));
         }
@@ -157,6 +237,18 @@ mod tests {
         assert_eq!(Estimate::of(&scene(1.2, 100), None).trace_rows, 13);
     }
 
+    /// The factor bound of a grid against a count by hand: a 2×3 grid has 7 links
+    /// (numbered row by row, each body's +x link before its +y link).
+    #[test]
+    fn the_profile_of_a_small_grid() {
+        let s = scene(1.0, 1);
+        // Links: 0 (1-2), 1 (1-4), 2 (2-3), 3 (2-5), 4 (3-6), 5 (4-5), 6 (5-6).
+        // Lowest link sharing a body: 0, 0, 0, 0, 2, 1, 3 → 1+2+3+4+3+5+4.
+        assert_eq!(profile(&s), 22);
+        // Too few links for the sparse path: no factor entries.
+        assert_eq!(Estimate::of(&s, None).factor_entries, 0);
+    }
+
     #[test]
     fn each_limit_names_its_field_and_flag() {
         let e = Estimate::of(&scene(1.0, 1), SimTime::from_secs_f64(0.001));
@@ -173,6 +265,8 @@ mod tests {
             m.contains("output.decimation") && m.contains("--max-output"),
             "{m}"
         );
+        let m = tight(|l| l.max_memory_bytes = 1_000_000);
+        assert!(m.contains("model") && m.contains("--max-memory"), "{m}");
         let m = tight(|l| l.max_checkpoints = 10);
         assert!(
             m.contains("--checkpoint-every") && m.contains("1000 checkpoints"),

@@ -91,19 +91,9 @@ pub struct CostPlan {
     pub trace_rows: u64,
     /// Upper bound on trace.csv [bytes].
     pub trace_bytes: u64,
-    /// Peak memory on the conjugate-gradient path [bytes]: [`MEMORY_BASE`] plus
-    /// [`MEMORY_PER_BODY`] per body, fitted to measured peaks; `None` with the exact
-    /// solve, whose factor's fill grows faster than the bodies.
-    pub memory_bytes: Option<u64>,
+    /// Estimated peak memory [bytes] ([`Estimate::memory_bytes`]).
+    pub memory_bytes: u64,
 }
-
-/// Peak resident memory of a run before any body [bytes] (measured: 6.3 MB for 256
-/// bodies with CG).
-pub const MEMORY_BASE: u64 = 6_000_000;
-/// Peak resident memory per body on the CG path [bytes]: the slope of measured peaks
-/// (`/usr/bin/time -f %M`, monolithic grids, CG 10, 10 steps): 16.7 MB at 64×64,
-/// 51.2 MB at 128×128, 186.7 MB at 256×256, i.e. 2.8 kB per body; rounded up.
-pub const MEMORY_PER_BODY: u64 = 3_000;
 
 /// Everything `validate` reports.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -282,13 +272,7 @@ pub fn plan(scenario: &Scenario) -> Result<RunPlan> {
             events,
             trace_rows: estimate.trace_rows,
             trace_bytes: estimate.trace_bytes,
-            memory_bytes: matches!(
-                s.solver,
-                crate::scenario::model::Solver::ConjugateGradient { .. }
-            )
-            .then(|| {
-                MEMORY_BASE.saturating_add(MEMORY_PER_BODY.saturating_mul(s.bodies.len() as u64))
-            }),
+            memory_bytes: estimate.memory_bytes,
         },
     })
 }
@@ -377,16 +361,13 @@ impl RunPlan {
             out.push(format!("controller: {c}"));
         }
         out.push(format!(
-            "a run takes {} steps, about {} messages and {} kernel events (at the scenario's τ), writes {} trace rows (trace.csv at most {} bytes), and needs {}",
+            "a run takes {} steps, about {} messages and {} kernel events (at the scenario's τ), writes {} trace rows (trace.csv at most {} bytes), and needs about {} MB of memory",
             self.cost.steps,
             self.cost.messages,
             self.cost.events,
             self.cost.trace_rows,
             self.cost.trace_bytes,
-            self.cost.memory_bytes.map_or(
-                "memory not estimated (the exact solve's fill)".to_string(),
-                |m| format!("about {} MB of memory", m.div_ceil(1_000_000))
-            )
+            self.cost.memory_bytes.div_ceil(1_000_000)
         ));
         out.join("\n")
     }

@@ -109,6 +109,20 @@ fn sizes_and_times_legal_one_by_one_but_not_together_are_refused_at_once() {
         "controller.grid_step",
         "at most 40000 points",
     );
+    // A 1000 × 1000 grid on the exact solve: its natural-order factor would need about
+    // 130 GB; refused at once naming the solver and the CG path's need (about 3 GB).
+    let big = json!({
+        "name": "big", "seed": 1, "duration": 0.01, "dt": 0.001,
+        "model": {"grid": {"rows": 1000, "cols": 1000, "spacing": 1.0, "mass": 1.0, "size": 0.1}},
+        "output": {"decimation": 1000}
+    });
+    refused(
+        &dir,
+        "memory",
+        &big,
+        "solver",
+        "{\"kind\": \"cg\"}` needs about 3006 MB",
+    );
 }
 
 #[test]
