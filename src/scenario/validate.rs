@@ -151,8 +151,25 @@ fn token_at(text: &str, line: usize, column: usize) -> Option<String> {
 /// Escapes control characters (a key may contain an escaped newline) so that every
 /// error stays on one line.
 fn one_line(s: &str) -> String {
-    let mut out = String::with_capacity(s.len());
+    let mut out = String::with_capacity(s.len().min(4 * QUOTED_MAX));
+    // A value quoted between backticks (serde's `unknown variant `…``) longer than
+    // QUOTED_MAX characters is cut, so a 100 kB string in a file gives a short message.
+    let mut quoted = None::<usize>;
     for c in s.chars() {
+        if c == '`' {
+            if let Some(n) = quoted.take() {
+                if n > QUOTED_MAX {
+                    out.push_str(&format!("… ({n} characters)"));
+                }
+            } else {
+                quoted = Some(0);
+            }
+        } else if let Some(n) = quoted.as_mut() {
+            *n += 1;
+            if *n > QUOTED_MAX {
+                continue;
+            }
+        }
         if c.is_control() {
             out.extend(c.escape_debug());
         } else {
@@ -161,6 +178,9 @@ fn one_line(s: &str) -> String {
     }
     out
 }
+
+/// Longest value an error message quotes in full [characters].
+const QUOTED_MAX: usize = 64;
 
 /// Validates a parsed file and converts it into a [`Scenario`].
 ///

@@ -12,7 +12,7 @@ use serde_json::{json, Value};
 use super::{bin, said, scratch, shipped, write_json};
 
 /// Runs `dsmcosim args…`, killing it after `limit` (then the test fails).
-fn bounded(args: &[&str], limit: Duration) -> Output {
+pub(super) fn bounded(args: &[&str], limit: Duration) -> Output {
     let mut child = bin()
         .args(args)
         .stdout(Stdio::piped())

@@ -7,6 +7,7 @@ use serde_json::{json, Value};
 
 mod check;
 mod contract;
+mod corpus;
 mod limits;
 mod overrides;
 

@@ -257,7 +257,9 @@ pub(super) fn controller(
             return Err(Error::invalid(
                 "controller.grid_step",
                 format!(
-                    "gives {} grid values per delay over [tau_min, tau_max], {} points over                      {dims} delays; at most {} points per window are measured (raise                      grid_step or narrow the bounds)",
+                    "gives {} grid values per delay over [tau_min, tau_max], {} points over \
+                     {dims} delays; at most {} points per window are measured (raise \
+                     grid_step or narrow the bounds)",
                     num(count),
                     num(points),
                     num(MAX_GRID_POINTS)
