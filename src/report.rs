@@ -11,12 +11,20 @@
 //! decimation involve no randomness, clock or hash order, so the same data gives the
 //! same bytes.
 //!
+//! Every legend sits in its own panel beside or below the plot area, never over the
+//! data.
+//!
 //! Inside: `axis` (ranges from data, ticks and tick labels for linear and log axes),
-//! `line` (line plots, staircases for delays, decimation of long series) and `heatmap`
-//! (coloured grid cells, colour bar and path overlay).
+//! `line` (line plots, staircases for delays, decimation of long series), `legend`
+//! (legend panels), `labels` (text beside points, placed to avoid overlaps),
+//! [`envelope`] (many series summed up as min/RMS/max plus the worst few) and `heatmap`
+//! (coloured grid cells with a colour bar or a legend of categories, path overlay).
 
 mod axis;
+pub mod envelope;
 mod heatmap;
+mod labels;
+mod legend;
 mod line;
 pub mod timeline;
 

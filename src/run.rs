@@ -17,7 +17,7 @@ use crate::error::{Error, Result};
 use crate::kernel::SimTime;
 use crate::output::run_dir::claim;
 use crate::output::{write_atomic, AtomicFile};
-use crate::report::{write_line_plot, LinePlot, Scale, Series};
+use crate::report::{envelope, write_line_plot, LinePlot, Scale, Series};
 use crate::scenario::model::{Scenario, Solver, Stabilizer};
 use crate::trace::{NetworkLog, Recorder};
 
@@ -426,17 +426,28 @@ fn plot(
     )
 }
 
+/// Links of largest `max |w|` drawn one line each in the constraint plot of a scene
+/// with more than [`envelope::FEW`] links.
+const WORST_LINKS: usize = 4;
+
 fn write_plots(out: &Path, world: &CoSim, rec: &Recorder) -> Result<()> {
     let name = &world.scenario().name;
     let title = |what: &str| format!("{name} — {what}");
     let time = "time t [s]";
+    // Up to 6 links one line each; more as their envelope plus the worst few.
+    let links = rec.constraint_series();
+    let what = if links.len() > envelope::FEW {
+        format!("constraint values of {} links", links.len())
+    } else {
+        "constraint values".to_string()
+    };
     plot(
         out,
         "constraints.svg",
-        &title("constraint values"),
+        &title(&what),
         time,
         "constraint value w [m]",
-        &rec.constraint_series(),
+        &envelope::summarize(&links, "links", WORST_LINKS),
         false,
     )?;
     plot(
