@@ -34,7 +34,7 @@ use plotters::style::RGBColor;
 
 use crate::error::Error;
 
-pub use heatmap::{heatmap_svg, write_heatmap, Heatmap};
+pub use heatmap::{heatmap_svg, write_heatmap, CellClass, Heatmap};
 pub use line::{line_plot_svg, write_line_plot, LinePlot, Series};
 pub use timeline::{slot_timeline_svg, write_slot_timeline, SlotTimeline};
 

@@ -34,6 +34,8 @@ pub(crate) enum Swatch {
     Marker(RGBColor),
     /// A black cross.
     Cross,
+    /// A filled box (a category of cells).
+    Fill(RGBColor),
     /// A line of `colour` across a box filled with `fill` (a line with a shaded band).
     Band {
         /// Fill of the box.
@@ -108,6 +110,11 @@ pub(crate) fn draw<DB: DrawingBackend>(
             }
             Swatch::Marker(colour) => area.draw(&Circle::new((mid, y), 4, colour.filled()))?,
             Swatch::Cross => area.draw(&Cross::new((mid, y), 5, BLACK.stroke_width(2)))?,
+            Swatch::Fill(colour) => {
+                let corners = [(x0, y - 7), (x1, y + 7)];
+                area.draw(&Rectangle::new(corners, colour.filled()))?;
+                area.draw(&Rectangle::new(corners, BLACK.mix(0.5).stroke_width(1)))?;
+            }
             Swatch::Band { fill, colour } => {
                 area.draw(&Rectangle::new([(x0, y - 7), (x1, y + 7)], fill.filled()))?;
                 area.draw(&PathElement::new(

@@ -536,7 +536,7 @@ fn render(plot: &LinePlot, target: &Path) -> Result<String> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::error::Error;
 
