@@ -94,3 +94,26 @@ fn text_width(text: &str, size: f64) -> u32 {
     let em = size / 1.24 / 1.24;
     (em * 0.7 * text.len() as f64).round() as u32
 }
+
+/// Helpers for tests that read the SVG text of a plot.
+#[cfg(test)]
+pub(crate) mod tests_support {
+    /// `(x, y, text)` of every `<text>` element (plotters writes the text on its own
+    /// line between the tag and `</text>`).
+    pub(crate) fn texts(svg: &str) -> Vec<(i32, i32, String)> {
+        let attr = |tag: &str, name: &str| -> Option<i32> {
+            let at = tag.find(&format!(" {name}=\""))? + name.len() + 3;
+            let len = tag[at..].find('"')?;
+            tag[at..at + len].parse::<f64>().ok().map(|v| v as i32)
+        };
+        svg.split("<text")
+            .skip(1)
+            .filter_map(|rest| {
+                let end = rest.find('>')?;
+                let tag = &rest[..end];
+                let body = &rest[end + 1..rest.find("</text>")?];
+                Some((attr(tag, "x")?, attr(tag, "y")?, body.trim().to_string()))
+            })
+            .collect()
+    }
+}

@@ -570,7 +570,7 @@ mod tests {
             classes: Some(&classes),
         };
         let svg = heatmap_svg(&map).unwrap();
-        let texts = crate::report::line::tests::texts(&svg);
+        let texts = crate::report::tests_support::texts(&svg);
         for name in ["stable", "diverged", "no value", "outcome", "log10 dt [s]"] {
             assert!(texts.iter().any(|t| t.2 == name), "missing {name:?}");
         }

@@ -51,18 +51,19 @@ fn bounds(text: &str, size: f64, at: (i32, i32), pos: Pos) -> Rect {
     (x0, y0, x0 + w, y0 + h)
 }
 
-/// Places `labels` (text, point [px]) inside `area`, avoiding each other and the
-/// `markers` [px]. Empty texts are skipped.
+/// Places `labels` (text, point [px]) inside `area`, avoiding (in this order of
+/// weight) the area's edges, each other, the `markers` and the points along drawn
+/// lines `line_points` [px]. Empty texts are skipped.
 pub(crate) fn place(
     labels: &[(String, (i32, i32))],
     markers: &[(i32, i32)],
+    line_points: &[(i32, i32)],
     area: Rect,
     size: f64,
 ) -> Vec<Placed> {
-    let marker_boxes: Vec<Rect> = markers
-        .iter()
-        .map(|&(x, y)| (x - MARKER_R, y - MARKER_R, x + MARKER_R, y + MARKER_R))
-        .collect();
+    let around = |&(x, y): &(i32, i32)| (x - MARKER_R, y - MARKER_R, x + MARKER_R, y + MARKER_R);
+    let marker_boxes: Vec<Rect> = markers.iter().map(around).collect();
+    let line_boxes: Vec<Rect> = line_points.iter().map(around).collect();
     let mut taken: Vec<Rect> = Vec::new();
     let mut out = Vec::new();
     for (text, (x, y)) in labels {
@@ -70,7 +71,7 @@ pub(crate) fn place(
             continue;
         }
         let mut best: Option<(usize, Placed, Rect)> = None;
-        for d in [OFFSET, 2 * OFFSET, 4 * OFFSET] {
+        for d in [OFFSET, 2 * OFFSET, 3 * OFFSET, 5 * OFFSET] {
             let e = d * 7 / 10;
             let candidates = [
                 ((x + d, *y), HPos::Left, VPos::Center),
@@ -86,9 +87,12 @@ pub(crate) fn place(
                 let pos = Pos::new(h, v);
                 let r = bounds(text, size, at, pos);
                 let outside = r.0 < area.0 || r.1 < area.1 || r.2 > area.2 || r.3 > area.3;
+                // Crossing a line costs the same however long the crossing.
                 let cost = 1000 * usize::from(outside)
                     + 100 * taken.iter().filter(|t| overlaps(**t, r)).count()
-                    + 10 * marker_boxes.iter().filter(|m| overlaps(**m, r)).count();
+                    + 20 * marker_boxes.iter().filter(|m| overlaps(**m, r)).count()
+                    + 15 * usize::from(line_boxes.iter().any(|m| overlaps(*m, r)))
+                    + usize::from(d > OFFSET);
                 if best.as_ref().is_none_or(|b| cost < b.0) {
                     let placed = Placed {
                         text: text.clone(),
@@ -123,7 +127,7 @@ mod tests {
             .map(|i| (format!("config {i}"), (300 + 4 * i, 200 + 3 * i)))
             .collect();
         let markers: Vec<(i32, i32)> = labels.iter().map(|l| l.1).collect();
-        let placed = place(&labels, &markers, (0, 0, 800, 500), 13.0);
+        let placed = place(&labels, &markers, &[], (0, 0, 800, 500), 13.0);
         assert_eq!(placed.len(), 6);
         let boxes: Vec<Rect> = placed
             .iter()
@@ -140,9 +144,9 @@ mod tests {
     #[test]
     fn labels_stay_inside_the_area() {
         let labels = vec![("right edge".to_string(), (795, 250))];
-        let placed = place(&labels, &[], (0, 0, 800, 500), 13.0);
+        let placed = place(&labels, &[], &[], (0, 0, 800, 500), 13.0);
         let r = bounds(&placed[0].text, 13.0, placed[0].at, placed[0].pos);
         assert!(r.2 <= 800, "{r:?}");
-        assert!(place(&[(String::new(), (1, 1))], &[], (0, 0, 10, 10), 13.0).is_empty());
+        assert!(place(&[(String::new(), (1, 1))], &[], &[], (0, 0, 10, 10), 13.0).is_empty());
     }
 }

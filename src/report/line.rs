@@ -506,13 +506,27 @@ fn render(plot: &LinePlot, target: &Path) -> Result<String> {
             .map(|(p, text)| (text.clone(), chart.backend_coord(p)))
             .collect();
         if !texts.is_empty() {
+            // Labels keep clear of markers and of the lines (points every 4 px).
             let markers: Vec<(i32, i32)> = prepared
                 .iter()
                 .flat_map(|d| d.markers.iter())
                 .map(|p| chart.backend_coord(p))
                 .collect();
+            let mut line_points = Vec::new();
+            for line in prepared.iter().flat_map(|d| d.lines.iter()) {
+                let pixels: Vec<(i32, i32)> = line.iter().map(|p| chart.backend_coord(p)).collect();
+                for seg in pixels.windows(2) {
+                    let (a, b) = (seg[0], seg[1]);
+                    let steps = ((b.0 - a.0).abs().max((b.1 - a.1).abs()) / 4).max(1);
+                    line_points.extend(
+                        (0..steps).map(|k| {
+                            (a.0 + (b.0 - a.0) * k / steps, a.1 + (b.1 - a.1) * k / steps)
+                        }),
+                    );
+                }
+            }
             let style = TextStyle::from((FONT, POINT_LABEL_PX).into_font()).color(&BLACK);
-            for placed in labels::place(&texts, &markers, area, POINT_LABEL_PX) {
+            for placed in labels::place(&texts, &markers, &line_points, area, POINT_LABEL_PX) {
                 root.draw(&Text::new(
                     placed.text,
                     placed.at,
@@ -536,9 +550,10 @@ fn render(plot: &LinePlot, target: &Path) -> Result<String> {
 }
 
 #[cfg(test)]
-pub(crate) mod tests {
+mod tests {
     use super::*;
     use crate::error::Error;
+    use crate::report::tests_support::texts;
 
     fn sine(label: &str, n: usize, phase: f64) -> Series {
         Series::new(
@@ -581,25 +596,6 @@ pub(crate) mod tests {
         assert!(svg.contains("#1F77B4") || svg.contains("#1f77b4"));
         // Same input, same bytes.
         assert_eq!(svg, line_plot_svg(&plot).unwrap());
-    }
-
-    /// `(x, y, text)` of every `<text>` element (plotters writes the text on its own
-    /// line between the tag and `</text>`).
-    pub(crate) fn texts(svg: &str) -> Vec<(i32, i32, String)> {
-        let attr = |tag: &str, name: &str| -> Option<i32> {
-            let at = tag.find(&format!(" {name}=\""))? + name.len() + 3;
-            let len = tag[at..].find('"')?;
-            tag[at..at + len].parse::<f64>().ok().map(|v| v as i32)
-        };
-        svg.split("<text")
-            .skip(1)
-            .filter_map(|rest| {
-                let end = rest.find('>')?;
-                let tag = &rest[..end];
-                let body = &rest[end + 1..rest.find("</text>")?];
-                Some((attr(tag, "x")?, attr(tag, "y")?, body.trim().to_string()))
-            })
-            .collect()
     }
 
     /// Largest x of the points of every `<polyline>` with more than `min_points`
