@@ -323,7 +323,7 @@ fn render(map: &Heatmap, target: &Path) -> Result<String> {
                 // A categorical map: swatches and names instead of a colour bar, the
                 // first row level with the plot area's top.
                 let top = chart.plotting_area().get_pixel_range().1.start;
-                let entries = legend::fit(entries, SIZE.1 as i32 - top);
+                let entries = legend::fit(legend::wrap(entries, panel), SIZE.1 as i32 - top);
                 legend::draw(
                     &root,
                     &entries,

@@ -45,6 +45,8 @@ pub(crate) enum Swatch {
     },
     /// Nothing: a heading or a summary row.
     Text,
+    /// Nothing, text indented as after a swatch: the next line of a wrapped entry.
+    Continued,
 }
 
 /// One legend row.
@@ -64,6 +66,40 @@ pub(crate) fn panel_width(entries: &[Entry]) -> u32 {
         .max()
         .unwrap_or(0);
     ((widest + 2 * PAD).max(0) as u32).clamp(WIDTH.0, WIDTH.1)
+}
+
+/// `entries` with every text wider than a panel `panel` px wide allows broken at
+/// spaces into several rows (a word wider than the row stays whole).
+pub(crate) fn wrap(entries: Vec<Entry>, panel: u32) -> Vec<Entry> {
+    let room = panel as i32 - 2 * PAD - SWATCH_W - GAP;
+    let fits = |t: &str| text_width(t, LEGEND_PX) as i32 <= room;
+    let mut out = Vec::new();
+    for entry in entries {
+        if fits(&entry.text) {
+            out.push(entry);
+            continue;
+        }
+        let mut swatch = entry.swatch;
+        let mut line = String::new();
+        for word in entry.text.split(' ') {
+            let longer = if line.is_empty() {
+                word.to_string()
+            } else {
+                format!("{line} {word}")
+            };
+            if fits(&longer) || line.is_empty() {
+                line = longer;
+            } else {
+                out.push(Entry {
+                    text: std::mem::replace(&mut line, word.to_string()),
+                    swatch,
+                });
+                swatch = Swatch::Continued;
+            }
+        }
+        out.push(Entry { text: line, swatch });
+    }
+    out
 }
 
 /// The entries that fit into `height` px: all of them, or as many as fit less one
@@ -122,7 +158,7 @@ pub(crate) fn draw<DB: DrawingBackend>(
                     colour.stroke_width(2),
                 ))?;
             }
-            Swatch::Text => {}
+            Swatch::Text | Swatch::Continued => {}
         }
         let x = match entry.swatch {
             Swatch::Text => x0,
@@ -155,6 +191,28 @@ mod tests {
         assert_eq!(cut.len(), 4);
         assert_eq!(cut[3].text, "… and 7 more");
         assert_eq!(fit(vec![entry("a"), entry("b")], 0)[0].text, "… and 2 more");
+    }
+
+    #[test]
+    fn long_texts_wrap_at_spaces() {
+        let long = "diverged: 4 of 12 points (left out; value unknown)";
+        let rows = wrap(vec![entry(long), entry("short")], WIDTH.1);
+        assert!(rows.len() > 2, "{rows:?}");
+        assert_eq!(rows[0].swatch, Swatch::Cross);
+        assert_eq!(rows[1].swatch, Swatch::Continued);
+        assert_eq!(rows.last().unwrap().text, "short");
+        let joined: Vec<&str> = rows[..rows.len() - 1]
+            .iter()
+            .map(|r| r.text.as_str())
+            .collect();
+        assert_eq!(joined.join(" "), long);
+        for r in &rows[..rows.len() - 1] {
+            let w = text_width(&r.text, LEGEND_PX) as i32 + SWATCH_W + GAP + 2 * PAD;
+            assert!(w <= WIDTH.1 as i32, "{r:?}: {w} px");
+        }
+        // One word wider than the panel stays whole.
+        let word = "x".repeat(100);
+        assert_eq!(wrap(vec![entry(&word)], WIDTH.1)[0].text, word);
     }
 
     #[test]

@@ -537,7 +537,7 @@ fn render(plot: &LinePlot, target: &Path) -> Result<String> {
         }
 
         // The legend: its own panel right of the plot area, its top at the area's top.
-        let entries = legend::fit(entries, area.3 - area.1);
+        let entries = legend::fit(legend::wrap(entries, legend_w), area.3 - area.1);
         legend::draw(
             &root,
             &entries,
