@@ -11,12 +11,20 @@
 //! decimation involve no randomness, clock or hash order, so the same data gives the
 //! same bytes.
 //!
+//! Every legend sits in its own panel beside or below the plot area, never over the
+//! data.
+//!
 //! Inside: `axis` (ranges from data, ticks and tick labels for linear and log axes),
-//! `line` (line plots, staircases for delays, decimation of long series) and `heatmap`
-//! (coloured grid cells, colour bar and path overlay).
+//! `line` (line plots, staircases for delays, decimation of long series), `legend`
+//! (legend panels), `labels` (text beside points, placed to avoid overlaps),
+//! [`envelope`] (many series summed up as min/RMS/max plus the worst few) and `heatmap`
+//! (coloured grid cells with a colour bar or a legend of categories, path overlay).
 
 mod axis;
+pub mod envelope;
 mod heatmap;
+mod labels;
+mod legend;
 mod line;
 pub mod timeline;
 
@@ -26,7 +34,7 @@ use plotters::style::RGBColor;
 
 use crate::error::Error;
 
-pub use heatmap::{heatmap_svg, write_heatmap, Heatmap};
+pub use heatmap::{heatmap_svg, write_heatmap, CellClass, Heatmap};
 pub use line::{line_plot_svg, write_line_plot, LinePlot, Series};
 pub use timeline::{slot_timeline_svg, write_slot_timeline, SlotTimeline};
 
@@ -85,4 +93,27 @@ fn plot_error<E: std::fmt::Display>(target: &Path) -> impl Fn(E) -> Error + '_ {
 fn text_width(text: &str, size: f64) -> u32 {
     let em = size / 1.24 / 1.24;
     (em * 0.7 * text.len() as f64).round() as u32
+}
+
+/// Helpers for tests that read the SVG text of a plot.
+#[cfg(test)]
+pub(crate) mod tests_support {
+    /// `(x, y, text)` of every `<text>` element (plotters writes the text on its own
+    /// line between the tag and `</text>`).
+    pub(crate) fn texts(svg: &str) -> Vec<(i32, i32, String)> {
+        let attr = |tag: &str, name: &str| -> Option<i32> {
+            let at = tag.find(&format!(" {name}=\""))? + name.len() + 3;
+            let len = tag[at..].find('"')?;
+            tag[at..at + len].parse::<f64>().ok().map(|v| v as i32)
+        };
+        svg.split("<text")
+            .skip(1)
+            .filter_map(|rest| {
+                let end = rest.find('>')?;
+                let tag = &rest[..end];
+                let body = &rest[end + 1..rest.find("</text>")?];
+                Some((attr(tag, "x")?, attr(tag, "y")?, body.trim().to_string()))
+            })
+            .collect()
+    }
 }

@@ -17,7 +17,7 @@ use crate::error::{Error, Result};
 use crate::kernel::SimTime;
 use crate::output::run_dir::claim;
 use crate::output::{write_atomic, AtomicFile};
-use crate::report::{write_line_plot, LinePlot, Scale, Series};
+use crate::report::{envelope, write_line_plot, LinePlot, Scale, Series};
 use crate::scenario::model::{Scenario, Solver, Stabilizer};
 use crate::trace::{NetworkLog, Recorder};
 
@@ -448,17 +448,28 @@ fn plot(
     )
 }
 
+/// Links of largest `max |w|` drawn one line each in the constraint plot of a scene
+/// with more than [`envelope::FEW`] links.
+const WORST_LINKS: usize = 4;
+
 fn write_plots(out: &Path, world: &CoSim, rec: &Recorder) -> Result<()> {
     let name = &world.scenario().name;
     let title = |what: &str| format!("{name} — {what}");
     let time = "time t [s]";
+    // Up to 6 links one line each; more as their envelope plus the worst few.
+    let links = rec.constraint_series();
+    let what = if links.len() > envelope::FEW {
+        format!("constraint values of {} links", links.len())
+    } else {
+        "constraint values".to_string()
+    };
     plot(
         out,
         "constraints.svg",
-        &title("constraint values"),
+        &title(&what),
         time,
         "constraint value w [m]",
-        &rec.constraint_series(),
+        &envelope::summarize(&links, "links", WORST_LINKS),
         false,
     )?;
     plot(
@@ -522,4 +533,119 @@ fn write_plots(out: &Path, world: &CoSim, rec: &Recorder) -> Result<()> {
         &[per_epoch("bandwidth used".into(), &|e| e.bandwidth)],
         true,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::report::tests_support::texts;
+
+    /// Runs a `rows` × `cols` grid (body 1 driven) for 0.5 s into a fresh directory and
+    /// returns its `constraints.svg`, `bodies.svg` and `trace.csv`.
+    fn grid_run(rows: u32, cols: u32) -> (String, String, String) {
+        let name = format!("plots_grid{rows}x{cols}");
+        let json = serde_json::json!({
+            "name": name, "seed": 7, "duration": 0.5, "dt": 0.001, "integrator": "euler",
+            "stabilizer": {"kind": "smc", "mu": 0.05, "k": 10.0, "epsilon": 0.1},
+            "model": {"grid": {"rows": rows, "cols": cols, "spacing": 1.8, "mass": 1.0, "size": 0.2}},
+            "forces": [{"body": 1, "amplitude": [0, 0, 20], "omega": 2.0, "phase": 0.0}],
+            "output": {"decimation": 10}
+        });
+        let scenario = crate::scenario::parse_str(&json.to_string(), &name).unwrap();
+        let dir = std::env::temp_dir().join(format!("dsmcosim-{name}-{}", std::process::id()));
+        run(&scenario, &dir).unwrap();
+        let read = |f: &str| std::fs::read_to_string(dir.join(f)).unwrap();
+        let out = (
+            read("constraints.svg"),
+            read("bodies.svg"),
+            read("trace.csv"),
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+        out
+    }
+
+    /// Largest x of the points of every `<polyline>` with more than 2 points (the data
+    /// lines; legend swatches have 2).
+    fn rightmost_data_x(svg: &str) -> i32 {
+        svg.split("<polyline")
+            .skip(1)
+            .filter_map(|rest| {
+                let at = rest.find(" points=\"")? + 9;
+                let len = rest[at..].find('"')?;
+                let xs: Vec<i32> = rest[at..at + len]
+                    .split_whitespace()
+                    .filter_map(|p| p.split(',').next()?.parse().ok())
+                    .collect();
+                (xs.len() > 2).then(|| xs.into_iter().max())?
+            })
+            .max()
+            .unwrap_or(0)
+    }
+
+    /// Link names `L<k>` among the texts of `svg`, with their x.
+    fn link_names(svg: &str) -> Vec<(i32, String)> {
+        texts(svg)
+            .into_iter()
+            .filter(|t| t.2.len() > 1 && t.2.starts_with('L'))
+            .filter(|t| t.2[1..].chars().all(|c| c.is_ascii_digit()))
+            .map(|t| (t.0, t.2))
+            .collect()
+    }
+
+    #[test]
+    fn many_links_plot_their_envelope_and_the_four_worst_beside_the_data() {
+        let (svg, bodies, trace) = grid_run(4, 4);
+        let texts = texts(&svg);
+        let has = |s: &str| texts.iter().any(|t| t.2 == s);
+        assert!(has("plots_grid4x4 — constraint values of 24 links"));
+        assert!(has("RMS of 24 links, band min–max"));
+        assert!(has("time t [s]") && has("constraint value w [m]"));
+        assert!(!texts.iter().any(|t| t.2.contains("more")), "nothing cut");
+        // The 4 links of largest max |w| in the trace, largest first.
+        let mut peak = [0.0f64; 24];
+        for row in trace.lines().skip(1) {
+            for (k, w) in row.split(',').skip(1).take(24).enumerate() {
+                peak[k] = peak[k].max(w.parse::<f64>().unwrap().abs());
+            }
+        }
+        let mut order: Vec<usize> = (0..24).collect();
+        order.sort_by(|&a, &b| peak[b].total_cmp(&peak[a]).then(a.cmp(&b)));
+        let want: Vec<String> = order[..4].iter().map(|k| format!("L{}", k + 1)).collect();
+        let names = link_names(&svg);
+        let got: Vec<String> = names.iter().map(|n| n.1.clone()).collect();
+        assert_eq!(got, want);
+        // The legend is right of every data line.
+        let right = rightmost_data_x(&svg);
+        for (x, name) in &names {
+            assert!(*x > right, "{name} at x = {x}, data up to {right}");
+        }
+        // bodies.svg draws x, y, z of the plotted bodies, legend beside the data too.
+        let right = rightmost_data_x(&bodies);
+        let entries: Vec<(i32, i32, String)> = crate::report::tests_support::texts(&bodies)
+            .into_iter()
+            .filter(|t| t.2.contains(" of B"))
+            .collect();
+        assert!(!entries.is_empty() && entries.len() <= 6, "{entries:?}");
+        assert!(
+            entries.iter().all(|t| t.0 > right),
+            "{entries:?} vs {right}"
+        );
+    }
+
+    #[test]
+    fn few_links_keep_one_line_each() {
+        let (svg, _, trace) = grid_run(2, 2);
+        let links = trace
+            .lines()
+            .next()
+            .unwrap()
+            .split(',')
+            .filter(|c| c.starts_with("w_L"))
+            .count();
+        assert!((1..=6).contains(&links), "{links} links");
+        let names: Vec<String> = link_names(&svg).into_iter().map(|n| n.1).collect();
+        let want: Vec<String> = (1..=links).map(|k| format!("L{k}")).collect();
+        assert_eq!(names, want);
+        assert!(!svg.contains("RMS of"));
+    }
 }

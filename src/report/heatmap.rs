@@ -1,5 +1,6 @@
 //! Heatmaps of a value over a 2-D grid (the grid-search cost surface), with a colour
-//! bar and an optional overlaid path (the optimizer's trajectory).
+//! bar and an optional overlaid path (the optimizer's trajectory); or of categories
+//! (a stability map's outcomes), each in its own colour with a legend naming it.
 
 use std::io;
 use std::path::Path;
@@ -7,6 +8,7 @@ use std::path::Path;
 use plotters::prelude::*;
 
 use super::axis::Axis;
+use super::legend::{self, Entry, Swatch};
 use super::{plot_error, text_width, Scale, DESC_PX, FONT, SIZE, TICK_PX, TITLE_PX};
 use crate::error::{Error, Result};
 use crate::output::write_atomic;
@@ -20,18 +22,17 @@ const MISSING: RGBColor = RGBColor(0xb4, 0xb4, 0xb4);
 /// Colour of the overlaid path.
 const PATH: RGBColor = RGBColor(0xd6, 0x27, 0x28);
 
-/// Viridis at nine evenly spaced stops: perceptually uniform, readable in grey.
-const VIRIDIS: [(u8, u8, u8); 9] = [
-    (0x44, 0x01, 0x54),
-    (0x47, 0x2d, 0x7b),
-    (0x3b, 0x52, 0x8b),
-    (0x2c, 0x72, 0x8e),
-    (0x21, 0x91, 0x8c),
-    (0x28, 0xae, 0x80),
-    (0x5e, 0xc9, 0x62),
-    (0xad, 0xdc, 0x30),
-    (0xfd, 0xe7, 0x25),
-];
+/// One category of cells of a categorical [`Heatmap`]: its legend name and colour.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CellClass<'a> {
+    /// Legend text: `diverged`.
+    pub name: &'a str,
+    /// Fill `[r, g, b]` of its cells.
+    pub rgb: [u8; 3],
+}
+
+/// Legend text of the cells that hold no category (or no value) in a categorical map.
+const MISSING_NAME: &str = "no value";
 
 /// A value over a grid of `x` × `y` cells.
 #[derive(Clone, Copy, Debug)]
@@ -42,14 +43,16 @@ pub struct Heatmap<'a> {
     pub x_label: &'a str,
     /// Text beside the y axis, with the unit.
     pub y_label: &'a str,
-    /// Text beside the colour bar, with the unit: `mean cost J`.
+    /// Text beside the colour bar, with the unit: `mean cost J`; the legend's heading
+    /// on a categorical map.
     pub value_label: &'a str,
     /// Cell centres along x, finite and strictly increasing.
     pub x: &'a [f64],
     /// Cell centres along y, finite and strictly increasing.
     pub y: &'a [f64],
     /// `values[iy][ix]` at `(x[ix], y[iy])`: `y.len()` rows of `x.len()` values. A
-    /// non-finite value marks a missing cell, drawn grey.
+    /// non-finite value marks a missing cell, drawn grey. On a categorical map the
+    /// value is the index of the cell's class; one that is not is missing.
     pub values: &'a [Vec<f64>],
     /// A path drawn over the cells as a line with markers, its end marked larger (an
     /// optimizer's trajectory); empty for none. Non-finite points are skipped.
@@ -60,6 +63,10 @@ pub struct Heatmap<'a> {
     /// Names of the cells along x and y for a categorical axis (then `x` or `y` are
     /// the indices 0, 1, … and every cell is equally wide); `None` for a numeric axis.
     pub categories: [Option<&'a [String]>; 2],
+    /// Discrete cell classes: `Some` draws each cell in the colour of its class
+    /// (`values` are indices into it) with a legend of swatches and names instead of
+    /// the colour bar; `None` for a continuous value on the viridis map.
+    pub classes: Option<&'a [CellClass<'a>]>,
 }
 
 /// Renders `map` as an SVG document.
@@ -76,15 +83,42 @@ pub fn write_heatmap(path: &Path, map: &Heatmap) -> Result<()> {
     write_atomic(path, svg.as_bytes())
 }
 
-/// Colour of `t` in `[0, 1]` on the viridis map (clamped).
+/// Colour of `t` in `[0, 1]` on plotters' viridis map (clamped; NaN is 0, which
+/// plotters' map would panic on).
 fn colour(t: f64) -> RGBColor {
     let t = if t.is_nan() { 0.0 } else { t.clamp(0.0, 1.0) };
-    let pos = t * (VIRIDIS.len() - 1) as f64;
-    let i = (pos.floor() as usize).min(VIRIDIS.len() - 2);
-    let f = pos - i as f64;
-    let (a, b) = (VIRIDIS[i], VIRIDIS[i + 1]);
-    let mix = |a: u8, b: u8| (f64::from(a) + (f64::from(b) - f64::from(a)) * f).round() as u8;
-    RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+    ViridisRGB.get_color(t)
+}
+
+/// The class index `v` names in `classes`, if it is one.
+fn class_of(v: f64, classes: &[CellClass]) -> Option<usize> {
+    (v.is_finite() && v >= 0.0 && v.fract() == 0.0 && v < classes.len() as f64)
+        .then_some(v as usize)
+}
+
+/// The legend of a categorical map: its heading, one swatch per class and, when a
+/// cell has no class, one for those.
+fn class_entries(map: &Heatmap, classes: &[CellClass]) -> Vec<Entry> {
+    let mut entries = vec![Entry {
+        text: map.value_label.to_string(),
+        swatch: Swatch::Text,
+    }];
+    entries.extend(classes.iter().map(|c| Entry {
+        text: c.name.to_string(),
+        swatch: Swatch::Fill(RGBColor(c.rgb[0], c.rgb[1], c.rgb[2])),
+    }));
+    if map
+        .values
+        .iter()
+        .flatten()
+        .any(|&v| class_of(v, classes).is_none())
+    {
+        entries.push(Entry {
+            text: MISSING_NAME.to_string(),
+            swatch: Swatch::Fill(MISSING),
+        });
+    }
+    entries
 }
 
 /// Cell edges around `centres`: midpoints between neighbours, the outer edges half a
@@ -190,13 +224,17 @@ fn render(map: &Heatmap, target: &Path) -> Result<String> {
     };
     let y_area = (y_width + 40).clamp(60, 200);
     let v_area = (widest(&v_axis) + 40).clamp(60, BAR_PANEL - 30);
+    let class_legend = map.classes.map(|c| class_entries(map, c));
+    let panel = class_legend
+        .as_deref()
+        .map_or(BAR_PANEL, |e| legend::panel_width(e).max(BAR_PANEL));
 
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
         root.fill(&WHITE).map_err(&err)?;
         let body = root.titled(map.title, (FONT, TITLE_PX)).map_err(&err)?;
-        let (main, bar) = body.split_horizontally(SIZE.0 - BAR_PANEL);
+        let (main, bar) = body.split_horizontally(SIZE.0 - panel);
 
         let mut chart = ChartBuilder::on(&main)
             .margin(16)
@@ -236,10 +274,13 @@ fn render(map: &Heatmap, target: &Path) -> Result<String> {
             let (x_edges, y_edges) = (&x_edges, &y_edges);
             let v_axis = &v_axis;
             row.iter().enumerate().map(move |(ix, &v)| {
-                let fill = if v.is_finite() {
-                    colour(v_axis.fraction(v))
-                } else {
-                    MISSING
+                let fill = match map.classes {
+                    Some(classes) => class_of(v, classes).map_or(MISSING, |c| {
+                        let [r, g, b] = classes[c].rgb;
+                        RGBColor(r, g, b)
+                    }),
+                    None if v.is_finite() => colour(v_axis.fraction(v)),
+                    None => MISSING,
                 };
                 Rectangle::new(
                     [
@@ -277,36 +318,59 @@ fn render(map: &Heatmap, target: &Path) -> Result<String> {
                     .map_err(&err)?;
             }
         }
-        // Colour bar: the value axis on the right of a strip of the colour map.
-        let mut bar_chart = ChartBuilder::on(&bar)
-            .margin_top(16)
-            .margin_bottom(16 + 55)
-            .margin_left(10)
-            .margin_right(10)
-            .right_y_label_area_size(v_area)
-            .build_cartesian_2d(Axis::exact(Scale::Linear, [0.0, 1.0]), v_axis)
-            .map_err(&err)?;
-        bar_chart
-            .configure_mesh()
-            .disable_mesh()
-            .disable_x_axis()
-            .y_desc(map.value_label)
-            .y_labels(8)
-            .label_style((FONT, TICK_PX))
-            .axis_desc_style((FONT, DESC_PX))
-            .draw()
-            .map_err(&err)?;
-        let (lo, hi) = (v_axis.lo(), v_axis.hi());
-        let strips = (0..BAR_STEPS).map(|i| {
-            let a = lo + (hi - lo) * i as f64 / BAR_STEPS as f64;
-            let b = lo + (hi - lo) * (i + 1) as f64 / BAR_STEPS as f64;
-            let t = (i as f64 + 0.5) / BAR_STEPS as f64;
-            Rectangle::new([(0.0, a), (1.0, b)], colour(t).filled())
-        });
-        bar_chart.draw_series(strips).map_err(&err)?;
+        match class_legend {
+            Some(entries) => {
+                // A categorical map: swatches and names instead of a colour bar, the
+                // first row level with the plot area's top.
+                let top = chart.plotting_area().get_pixel_range().1.start;
+                let entries = legend::fit(legend::wrap(entries, panel), SIZE.1 as i32 - top);
+                legend::draw(
+                    &root,
+                    &entries,
+                    ((SIZE.0 - panel) as i32 + legend::INSET, top),
+                )
+                .map_err(&err)?;
+            }
+            None => colour_bar(&bar, map.value_label, v_axis, v_area).map_err(&err)?,
+        }
         root.present().map_err(&err)?;
     }
     Ok(svg)
+}
+
+/// Draws the colour bar into `area`: the value axis on the right of a strip of the
+/// colour map.
+fn colour_bar<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    value_label: &str,
+    v_axis: Axis,
+    v_area: u32,
+) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let mut bar_chart = ChartBuilder::on(area)
+        .margin_top(16)
+        .margin_bottom(16 + 55)
+        .margin_left(10)
+        .margin_right(10)
+        .right_y_label_area_size(v_area)
+        .build_cartesian_2d(Axis::exact(Scale::Linear, [0.0, 1.0]), v_axis)?;
+    bar_chart
+        .configure_mesh()
+        .disable_mesh()
+        .disable_x_axis()
+        .y_desc(value_label)
+        .y_labels(8)
+        .label_style((FONT, TICK_PX))
+        .axis_desc_style((FONT, DESC_PX))
+        .draw()?;
+    let (lo, hi) = (v_axis.lo(), v_axis.hi());
+    let strips = (0..BAR_STEPS).map(|i| {
+        let a = lo + (hi - lo) * i as f64 / BAR_STEPS as f64;
+        let b = lo + (hi - lo) * (i + 1) as f64 / BAR_STEPS as f64;
+        let t = (i as f64 + 0.5) / BAR_STEPS as f64;
+        Rectangle::new([(0.0, a), (1.0, b)], colour(t).filled())
+    });
+    bar_chart.draw_series(strips)?;
+    Ok(())
 }
 
 #[cfg(test)]
@@ -348,6 +412,7 @@ mod tests {
             path_overlay: &path,
             line_overlay: &[(1.0, 10.0), (6.5, 2.0)],
             categories: [None, None],
+            classes: None,
         };
         let svg = heatmap_svg(&map).unwrap();
         let white_line = |svg: &str| {
@@ -405,6 +470,7 @@ mod tests {
                 path_overlay,
                 line_overlay: path_overlay,
                 categories: [None, None],
+                classes: None,
             };
             heatmap_svg(&map).unwrap_or_else(|e| panic!("{x:?} {y:?} {values:?}: {e}"));
         }
@@ -424,6 +490,7 @@ mod tests {
             path_overlay: &[],
             line_overlay: &[],
             categories: [None, None],
+            classes: None,
         };
         assert!(heatmap_svg(&base).is_ok());
         for map in [
@@ -455,10 +522,97 @@ mod tests {
         }
     }
 
+    /// `(x, width, fill)` of every `<rect>`.
+    fn rects(svg: &str) -> Vec<(i32, i32, String)> {
+        let attr = |tag: &str, name: &str| -> Option<String> {
+            let at = tag.find(&format!(" {name}=\""))? + name.len() + 3;
+            let len = tag[at..].find('"')?;
+            Some(tag[at..at + len].to_string())
+        };
+        svg.split("<rect")
+            .skip(1)
+            .filter_map(|rest| {
+                let tag = &rest[..rest.find('>')?];
+                Some((
+                    attr(tag, "x")?.parse().ok()?,
+                    attr(tag, "width")?.parse().ok()?,
+                    attr(tag, "fill")?,
+                ))
+            })
+            .collect()
+    }
+
+    #[test]
+    fn categorical_map_has_a_legend_of_classes_beside_the_cells() {
+        let classes = [
+            CellClass {
+                name: "stable",
+                rgb: [0x2c, 0x7f, 0xb8],
+            },
+            CellClass {
+                name: "diverged",
+                rgb: [0x7f, 0x00, 0x00],
+            },
+        ];
+        // Two stable, two diverged, two without a class (NaN, 7).
+        let values = vec![vec![0.0, 1.0, 1.0], vec![f64::NAN, 0.0, 7.0]];
+        let map = Heatmap {
+            title: "Stability",
+            x_label: "log10 dt [s]",
+            y_label: "log10 μ [s]",
+            value_label: "outcome",
+            x: &[1.0, 2.0, 3.0],
+            y: &[1.0, 2.0],
+            values: &values,
+            path_overlay: &[],
+            line_overlay: &[],
+            categories: [None, None],
+            classes: Some(&classes),
+        };
+        let svg = heatmap_svg(&map).unwrap();
+        let texts = crate::report::tests_support::texts(&svg);
+        for name in ["stable", "diverged", "no value", "outcome", "log10 dt [s]"] {
+            assert!(texts.iter().any(|t| t.2 == name), "missing {name:?}");
+        }
+        let boxes = rects(&svg);
+        let filled = |fill: &str| boxes.iter().filter(|r| r.2 == fill).count();
+        // Cells plus one legend swatch each; no colour bar of viridis strips.
+        assert_eq!(filled("#2C7FB8"), 2 + 1);
+        assert_eq!(filled("#7F0000"), 2 + 1);
+        assert_eq!(filled("#B4B4B4"), 2 + 1);
+        assert!(boxes.len() < 20, "no colour bar: {} rects", boxes.len());
+        let cells_right = boxes
+            .iter()
+            .filter(|r| r.1 > 40)
+            .filter(|r| r.2 != "#FFFFFF")
+            .map(|r| r.0 + r.1)
+            .max()
+            .unwrap();
+        for name in ["stable", "diverged"] {
+            let x = texts.iter().find(|t| t.2 == name).unwrap().0;
+            assert!(x > cells_right, "{name} at {x}, cells up to {cells_right}");
+        }
+        // Every cell has a class: no "no value" entry.
+        let all = vec![vec![0.0, 1.0, 1.0], vec![1.0, 0.0, 0.0]];
+        let svg = heatmap_svg(&Heatmap {
+            values: &all,
+            ..map
+        })
+        .unwrap();
+        assert!(svg.contains("stable") && !svg.contains("no value"));
+        // A continuous map keeps its colour bar.
+        let svg = heatmap_svg(&Heatmap {
+            classes: None,
+            ..map
+        })
+        .unwrap();
+        assert!(!svg.contains("stable") && rects(&svg).len() > BAR_STEPS);
+    }
+
     #[test]
     fn colour_map_ends() {
         assert_eq!(colour(0.0), RGBColor(0x44, 0x01, 0x54));
-        assert_eq!(colour(1.0), RGBColor(0xfd, 0xe7, 0x25));
+        assert_eq!(colour(1.0), RGBColor(0xfe, 0xe8, 0x25));
         assert_eq!(colour(f64::NAN), colour(0.0));
         assert_eq!(colour(2.0), colour(1.0));
     }

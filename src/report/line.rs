@@ -1,19 +1,22 @@
-//! Line plots of signals over time: one line per series, a legend, linear or log axes,
-//! optional zero-order-hold staircases and markers, and decimation of long series.
+//! Line plots of signals over time: one line (or set of markers) per series, a legend
+//! in a panel right of the plot area (never over the data), linear or log axes,
+//! optional zero-order-hold staircases, markers and labels beside points, and
+//! decimation of long series.
 
 use std::path::Path;
 
 use plotters::prelude::*;
 
 use super::axis::{plottable, Axis};
+use super::legend::{self, Entry, Swatch};
 use super::{
-    plot_error, text_width, Scale, DESC_PX, FONT, GRID, LEGEND_PX, PALETTE, SIZE, TICK_PX, TITLE_PX,
+    labels, plot_error, text_width, Scale, DESC_PX, FONT, GRID, PALETTE, SIZE, TICK_PX, TITLE_PX,
 };
 use crate::error::Result;
 use crate::output::write_atomic;
 
-/// At most this many series get a legend entry; the rest are summed up in one entry.
-const LEGEND_MAX: usize = 12;
+/// Font size of the labels beside points [px, as plotters takes it].
+const POINT_LABEL_PX: f64 = 14.0;
 /// A series with more points than this (after the staircase) is decimated for drawing.
 const DECIMATE_ABOVE: usize = 4000;
 /// Columns the x range is cut into for decimation; more than the plot's width [px] so
@@ -37,9 +40,23 @@ pub struct Series {
     /// Vertical bars `(x, low, high)` drawn in the series' colour (a range around each
     /// point, e.g. min–max over repeated draws); empty for none.
     pub bars: Vec<(f64, f64, f64)>,
+    /// A shaded band `(x, low, high)` behind the line, in a light shade of the series'
+    /// colour (a range such as min–max over many series); empty for none. Bands are
+    /// drawn before every line; a non-finite or unplottable point breaks the band.
+    pub band: Vec<(f64, f64, f64)>,
     /// Drawn as crosses without a line (points set apart from the lines, such as
     /// diverged runs), in black.
     pub crosses: bool,
+    /// Drawn as markers without a line (points that are not a continuum, such as one
+    /// run per configuration).
+    pub points_only: bool,
+    /// Text next to each point (`labels[i]` beside `points[i]`, empty for none); placed
+    /// to overlap other labels and markers as little as possible. Empty for no labels.
+    pub labels: Vec<String>,
+    /// Colour `[r, g, b]` instead of the next palette colour.
+    pub colour: Option<[u8; 3]>,
+    /// Line width [px] instead of 2.
+    pub width: Option<u32>,
 }
 
 impl Series {
@@ -48,8 +65,7 @@ impl Series {
         Series {
             label: label.into(),
             points,
-            bars: Vec::new(),
-            crosses: false,
+            ..Series::default()
         }
     }
 
@@ -61,9 +77,36 @@ impl Series {
         }
     }
 
+    /// Points drawn as markers, no line (see [`Series::points_only`]).
+    pub fn points(label: impl Into<String>, points: Vec<(f64, f64)>) -> Series {
+        Series {
+            points_only: true,
+            ..Series::new(label, points)
+        }
+    }
+
     /// The series with vertical bars `(x, low, high)`.
     pub fn with_bars(mut self, bars: Vec<(f64, f64, f64)>) -> Series {
         self.bars = bars;
+        self
+    }
+
+    /// The series with a shaded band `(x, low, high)` (see [`Series::band`]).
+    pub fn with_band(mut self, band: Vec<(f64, f64, f64)>) -> Series {
+        self.band = band;
+        self
+    }
+
+    /// The series with a text beside each point (see [`Series::labels`]).
+    pub fn with_labels(mut self, labels: Vec<String>) -> Series {
+        self.labels = labels;
+        self
+    }
+
+    /// The series in colour `[r, g, b]` with lines `width` px wide.
+    pub fn styled(mut self, colour: [u8; 3], width: u32) -> Series {
+        self.colour = Some(colour);
+        self.width = Some(width);
         self
     }
 }
@@ -77,7 +120,9 @@ pub struct LinePlot<'a> {
     pub x_label: &'a str,
     /// Text beside the y axis, with the unit: `delay τ [ms]`.
     pub y_label: &'a str,
-    /// The lines, drawn in order with colours from a fixed palette of 12.
+    /// The lines, drawn in order with colours from a fixed palette of 12 (series with
+    /// their own colour skip the palette). The legend lists them in this order, as many
+    /// as fit beside the plot area and then `… and N more`.
     pub series: &'a [Series],
     /// Scale of the x axis.
     pub x_scale: Scale,
@@ -206,8 +251,11 @@ fn prepare(series: &Series, plot: &LinePlot, x_axis: &Axis) -> Prepared {
     if drawn > DECIMATE_ABOVE {
         lines = lines.iter().map(|l| decimate(l, x_axis, COLUMNS)).collect();
     }
+    if series.points_only {
+        lines.clear();
+    }
     let mut markers = Vec::new();
-    if plot.markers {
+    if plot.markers || series.points_only {
         let count: usize = runs.iter().map(Vec::len).sum();
         for r in &runs {
             if count > DECIMATE_ABOVE {
@@ -220,6 +268,99 @@ fn prepare(series: &Series, plot: &LinePlot, x_axis: &Axis) -> Prepared {
     Prepared { lines, markers }
 }
 
+/// The colour of each series: its own, or the palette colour of its index among the
+/// series without one.
+fn colours(series: &[Series]) -> Vec<RGBColor> {
+    let mut next = 0;
+    series
+        .iter()
+        .map(|s| match s.colour {
+            Some([r, g, b]) => RGBColor(r, g, b),
+            None => {
+                next += 1;
+                PALETTE[(next - 1) % PALETTE.len()]
+            }
+        })
+        .collect()
+}
+
+/// The light shade of `colour` a band is filled with: 25 % colour on white.
+fn shade(colour: RGBColor) -> RGBColor {
+    let mix = |c: u8| ((u16::from(c) + 3 * 255) / 4) as u8;
+    RGBColor(mix(colour.0), mix(colour.1), mix(colour.2))
+}
+
+/// Outlines of the unbroken runs of `band`: the highs left to right, then the lows
+/// back. A run longer than 4000 points keeps, per 1/1000 of the x range, the lowest
+/// low and highest high at the column's first x.
+fn band_runs(band: &[(f64, f64, f64)], plot: &LinePlot, x_axis: &Axis) -> Vec<Vec<(f64, f64)>> {
+    let ok = |&(x, lo, hi): &(f64, f64, f64)| {
+        plottable(plot.x_scale, x) && plottable(plot.y_scale, lo) && plottable(plot.y_scale, hi)
+    };
+    let mut runs: Vec<Vec<(f64, f64, f64)>> = Vec::new();
+    let mut current = Vec::new();
+    for b in band {
+        if ok(b) {
+            current.push(*b);
+        } else if !current.is_empty() {
+            runs.push(std::mem::take(&mut current));
+        }
+    }
+    if !current.is_empty() {
+        runs.push(current);
+    }
+    let column = |x: f64| ((x_axis.fraction(x) * COLUMNS as f64) as usize).min(COLUMNS - 1);
+    runs.into_iter()
+        .map(|run| {
+            let run = if run.len() > DECIMATE_ABOVE {
+                let mut merged: Vec<(f64, f64, f64)> = Vec::new();
+                for (x, lo, hi) in run {
+                    match merged.last_mut() {
+                        Some(m) if column(m.0) == column(x) => {
+                            m.1 = m.1.min(lo);
+                            m.2 = m.2.max(hi);
+                        }
+                        _ => merged.push((x, lo, hi)),
+                    }
+                }
+                merged
+            } else {
+                run
+            };
+            let mut outline: Vec<(f64, f64)> = run.iter().map(|b| (b.0, b.2)).collect();
+            outline.extend(run.iter().rev().map(|b| (b.0, b.1)));
+            outline
+        })
+        .collect()
+}
+
+/// One legend row per series, in order.
+fn legend_entries(plot: &LinePlot, colours: &[RGBColor]) -> Vec<Entry> {
+    plot.series
+        .iter()
+        .zip(colours)
+        .map(|(s, &colour)| Entry {
+            text: s.label.clone(),
+            swatch: if s.crosses {
+                Swatch::Cross
+            } else if !s.band.is_empty() {
+                Swatch::Band {
+                    fill: shade(colour),
+                    colour,
+                }
+            } else if s.points_only {
+                Swatch::Marker(colour)
+            } else {
+                Swatch::Line {
+                    colour,
+                    width: s.width.unwrap_or(2),
+                    marker: plot.markers,
+                }
+            },
+        })
+        .collect()
+}
+
 fn render(plot: &LinePlot, target: &Path) -> Result<String> {
     let err = plot_error(target);
     let valid = plot
@@ -230,7 +371,7 @@ fn render(plot: &LinePlot, target: &Path) -> Result<String> {
     let bar_ends = plot
         .series
         .iter()
-        .flat_map(|s| s.bars.iter())
+        .flat_map(|s| s.bars.iter().chain(&s.band))
         .flat_map(|&(x, lo, hi)| [(x, lo), (x, hi)])
         .filter(|&(x, y)| plottable(plot.x_scale, x) && plottable(plot.y_scale, y));
     let x_axis = Axis::fit(plot.x_scale, valid.clone().map(|p| p.0));
@@ -243,6 +384,14 @@ fn render(plot: &LinePlot, target: &Path) -> Result<String> {
         .iter()
         .map(|s| prepare(s, plot, &x_axis))
         .collect();
+    let colours = colours(plot.series);
+    let entries = legend_entries(plot, &colours);
+    // The legend panel at the right, outside the plot area.
+    let legend_w = if entries.is_empty() {
+        0
+    } else {
+        legend::panel_width(&entries)
+    };
 
     // The y label area must hold the widest tick label and the rotated axis label.
     let widest = y_axis
@@ -257,8 +406,9 @@ fn render(plot: &LinePlot, target: &Path) -> Result<String> {
     {
         let root = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
         root.fill(&WHITE).map_err(&err)?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(plot.title, (FONT, TITLE_PX))
+        let body = root.titled(plot.title, (FONT, TITLE_PX)).map_err(&err)?;
+        let (main, _legend_panel) = body.split_horizontally(SIZE.0 - legend_w);
+        let mut chart = ChartBuilder::on(&main)
             .margin(16)
             .x_label_area_size(55)
             .y_label_area_size(y_area)
@@ -277,21 +427,31 @@ fn render(plot: &LinePlot, target: &Path) -> Result<String> {
             .draw()
             .map_err(&err)?;
 
-        for (i, (series, drawn)) in plot.series.iter().zip(&prepared).enumerate() {
+        // Bands first, so that every line is drawn over them.
+        for (series, &colour) in plot.series.iter().zip(&colours) {
+            let fill = shade(colour).filled();
+            chart
+                .draw_series(
+                    band_runs(&series.band, plot, &x_axis)
+                        .into_iter()
+                        .map(|outline| Polygon::new(outline, fill)),
+                )
+                .map_err(&err)?;
+        }
+        for ((series, drawn), &colour) in plot.series.iter().zip(&prepared).zip(&colours) {
             if series.crosses {
                 let style = BLACK.stroke_width(2);
-                let points: Vec<(f64, f64)> = drawn.lines.iter().flatten().copied().collect();
-                let anno = chart
+                let points: Vec<(f64, f64)> = runs(&series.points, plot.x_scale, plot.y_scale)
+                    .into_iter()
+                    .flatten()
+                    .collect();
+                chart
                     .draw_series(points.iter().map(|&p| Cross::new(p, 5, style)))
                     .map_err(&err)?;
-                if i < LEGEND_MAX {
-                    anno.label(series.label.as_str())
-                        .legend(move |(x, y)| Cross::new((x + 10, y), 5, style));
-                }
                 continue;
             }
-            let style = PALETTE[i % PALETTE.len()].stroke_width(2);
-            let anno = chart
+            let style = colour.stroke_width(series.width.unwrap_or(2));
+            chart
                 .draw_series(
                     drawn
                         .lines
@@ -299,24 +459,12 @@ fn render(plot: &LinePlot, target: &Path) -> Result<String> {
                         .map(|l| PathElement::new(l.clone(), style)),
                 )
                 .map_err(&err)?;
-            if i < LEGEND_MAX {
-                anno.label(series.label.as_str());
-                if plot.markers {
-                    anno.legend(move |(x, y)| {
-                        EmptyElement::at((x, y))
-                            + PathElement::new(vec![(0, 0), (20, 0)], style)
-                            + Circle::new((10, 0), 3, style.filled())
-                    });
-                } else {
-                    anno.legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style));
-                }
-            }
             let bars = series.bars.iter().filter(|&&(x, lo, hi)| {
                 plottable(plot.x_scale, x)
                     && plottable(plot.y_scale, lo)
                     && plottable(plot.y_scale, hi)
             });
-            let thin = PALETTE[i % PALETTE.len()].stroke_width(1);
+            let thin = colour.stroke_width(1);
             let bars: Vec<(f64, f64, f64)> = bars.copied().collect();
             chart
                 .draw_series(
@@ -334,85 +482,68 @@ fn render(plot: &LinePlot, target: &Path) -> Result<String> {
                         }),
                 )
                 .map_err(&err)?;
-            if plot.markers {
-                chart
-                    .draw_series(
-                        drawn
-                            .markers
-                            .iter()
-                            .map(|&p| Circle::new(p, 3, style.filled())),
-                    )
-                    .map_err(&err)?;
-            }
-        }
-        if plot.series.len() > LEGEND_MAX {
+            let radius = if series.points_only { 4 } else { 3 };
             chart
-                .draw_series(std::iter::empty::<EmptyElement<(f64, f64), _>>())
-                .map_err(&err)?
-                .label(format!("… and {} more", plot.series.len() - LEGEND_MAX))
-                .legend(EmptyElement::at);
-        }
-        if !plot.series.is_empty() {
-            // The legend goes into the plot corner that covers the fewest drawn points
-            // (line vertices, points along each segment, markers).
-            let entries = plot.series.len().min(LEGEND_MAX + 1) as i32;
-            let label_w = plot
-                .series
-                .iter()
-                .take(LEGEND_MAX)
-                .map(|s| text_width(&s.label, LEGEND_PX))
-                .max()
-                .unwrap_or(0) as i32;
-            let (w, h) = (label_w + 50, entries * (LEGEND_PX as i32 + 6) + 16);
-            let ((left, top), (right, bottom)) = {
-                let (xr, yr) = chart.plotting_area().get_pixel_range();
-                ((xr.start, yr.start), (xr.end, yr.end))
-            };
-            let corners = [
-                (SeriesLabelPosition::UpperRight, (right - w - 8, top + 8)),
-                (SeriesLabelPosition::UpperLeft, (left + 8, top + 8)),
-                (
-                    SeriesLabelPosition::LowerRight,
-                    (right - w - 8, bottom - h - 8),
-                ),
-                (SeriesLabelPosition::LowerLeft, (left + 8, bottom - h - 8)),
-            ];
-            let mut covered = [0usize; 4];
-            for drawn in &prepared {
-                let points = drawn.lines.iter().flat_map(|l| {
-                    l.windows(2).flat_map(|seg| {
-                        (0..8).map(move |k| {
-                            let u = f64::from(k) / 8.0;
-                            (
-                                seg[0].0 + (seg[1].0 - seg[0].0) * u,
-                                seg[0].1 + (seg[1].1 - seg[0].1) * u,
-                            )
-                        })
-                    })
-                });
-                for p in points
-                    .chain(drawn.markers.iter().copied())
-                    .chain(drawn.lines.iter().filter_map(|l| l.last().copied()))
-                {
-                    let (px, py) = chart.backend_coord(&p);
-                    for (c, &(_, (x0, y0))) in corners.iter().enumerate() {
-                        if px >= x0 && px <= x0 + w && py >= y0 && py <= y0 + h {
-                            covered[c] += 1;
-                        }
-                    }
-                }
-            }
-            let best = (0..4).min_by_key(|&c| covered[c]).unwrap_or(0);
-            chart
-                .configure_series_labels()
-                .position(corners[best].0.clone())
-                .margin(8)
-                .label_font((FONT, LEGEND_PX))
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK.mix(0.4))
-                .draw()
+                .draw_series(
+                    drawn
+                        .markers
+                        .iter()
+                        .map(|&p| Circle::new(p, radius, colour.filled())),
+                )
                 .map_err(&err)?;
         }
+
+        let (xr, yr) = chart.plotting_area().get_pixel_range();
+        let area = (xr.start, yr.start, xr.end, yr.end);
+
+        // Point labels, placed around the markers.
+        let shown = |&(x, y): &(f64, f64)| plottable(plot.x_scale, x) && plottable(plot.y_scale, y);
+        let texts: Vec<(String, (i32, i32))> = plot
+            .series
+            .iter()
+            .flat_map(|s| s.points.iter().zip(&s.labels))
+            .filter(|(p, text)| shown(p) && !text.is_empty())
+            .map(|(p, text)| (text.clone(), chart.backend_coord(p)))
+            .collect();
+        if !texts.is_empty() {
+            // Labels keep clear of markers and of the lines (points every 4 px).
+            let markers: Vec<(i32, i32)> = prepared
+                .iter()
+                .flat_map(|d| d.markers.iter())
+                .map(|p| chart.backend_coord(p))
+                .collect();
+            let mut line_points = Vec::new();
+            for line in prepared.iter().flat_map(|d| d.lines.iter()) {
+                let pixels: Vec<(i32, i32)> = line.iter().map(|p| chart.backend_coord(p)).collect();
+                for seg in pixels.windows(2) {
+                    let (a, b) = (seg[0], seg[1]);
+                    let steps = ((b.0 - a.0).abs().max((b.1 - a.1).abs()) / 4).max(1);
+                    line_points.extend(
+                        (0..steps).map(|k| {
+                            (a.0 + (b.0 - a.0) * k / steps, a.1 + (b.1 - a.1) * k / steps)
+                        }),
+                    );
+                }
+            }
+            let style = TextStyle::from((FONT, POINT_LABEL_PX).into_font()).color(&BLACK);
+            for placed in labels::place(&texts, &markers, &line_points, area, POINT_LABEL_PX) {
+                root.draw(&Text::new(
+                    placed.text,
+                    placed.at,
+                    style.clone().pos(placed.pos),
+                ))
+                .map_err(&err)?;
+            }
+        }
+
+        // The legend: its own panel right of the plot area, its top at the area's top.
+        let entries = legend::fit(legend::wrap(entries, legend_w), area.3 - area.1);
+        legend::draw(
+            &root,
+            &entries,
+            ((SIZE.0 - legend_w) as i32 + legend::INSET, area.1),
+        )
+        .map_err(&err)?;
         root.present().map_err(&err)?;
     }
     Ok(svg)
@@ -422,6 +553,7 @@ fn render(plot: &LinePlot, target: &Path) -> Result<String> {
 mod tests {
     use super::*;
     use crate::error::Error;
+    use crate::report::tests_support::texts;
 
     fn sine(label: &str, n: usize, phase: f64) -> Series {
         Series::new(
@@ -466,18 +598,98 @@ mod tests {
         assert_eq!(svg, line_plot_svg(&plot).unwrap());
     }
 
+    /// Largest x of the points of every `<polyline>` with more than `min_points`
+    /// points (data lines, not legend swatches).
+    fn rightmost_line_x(svg: &str, min_points: usize) -> i32 {
+        svg.split("<polyline")
+            .skip(1)
+            .filter_map(|rest| {
+                let at = rest.find(" points=\"")? + 9;
+                let len = rest[at..].find('"')?;
+                let points: Vec<i32> = rest[at..at + len]
+                    .split_whitespace()
+                    .filter_map(|p| p.split(',').next()?.parse().ok())
+                    .collect();
+                (points.len() > min_points).then(|| points.into_iter().max())?
+            })
+            .max()
+            .unwrap_or(0)
+    }
+
     #[test]
-    fn more_than_twelve_series_are_summed_up() {
-        let series: Vec<Series> = (0..15)
+    fn legend_sits_right_of_the_plot_area() {
+        // A spike at the right end, where a legend inside the plot would sit.
+        let mut series = vec![sine("w_L1 [m]", 500, 0.0), sine("w_L2 [m]", 500, 1.0)];
+        series[0].points.push((0.5, 1.0));
+        let plot = LinePlot::new("Legend", "time t [s]", "w [m]", &series);
+        let svg = line_plot_svg(&plot).unwrap();
+        let data_right = rightmost_line_x(&svg, 2);
+        assert!(data_right > 600, "{data_right}");
+        for label in ["w_L1 [m]", "w_L2 [m]"] {
+            let (x, _, _) = texts(&svg)
+                .into_iter()
+                .find(|t| t.2 == label)
+                .unwrap_or_else(|| panic!("no legend text {label:?}"));
+            // The plot area ends 5 % of the x span right of the data.
+            assert!(
+                x > data_right + (data_right / 20),
+                "{label} at x = {x}, data up to {data_right}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_legend_longer_than_the_plot_is_summed_up() {
+        let series: Vec<Series> = (0..40)
             .map(|i| sine(&format!("body B{i}"), 50, i as f64))
             .collect();
         let mut plot = LinePlot::new("Bodies", "time t [s]", "x [m]", &series);
         plot.markers = true;
         let svg = line_plot_svg(&plot).unwrap();
         assert_svg(&svg);
-        assert!(svg.contains("body B11"));
-        assert!(!svg.contains("body B12"));
-        assert!(svg.contains("… and 3 more"));
+        let texts = texts(&svg);
+        let shown = texts.iter().filter(|t| t.2.starts_with("body B")).count();
+        assert!((12..40).contains(&shown), "{shown} entries");
+        assert!(texts
+            .iter()
+            .any(|t| t.2 == format!("… and {} more", 40 - shown)));
+        // Fifteen fit without a summary.
+        let plot = LinePlot::new("Bodies", "time t [s]", "x [m]", &series[..15]);
+        let svg = line_plot_svg(&plot).unwrap();
+        assert!(svg.contains("body B14") && !svg.contains("more"));
+    }
+
+    #[test]
+    fn points_only_series_have_markers_labels_and_no_line() {
+        let series = [
+            Series::points("integrator", vec![(1.0, 1e-2), (2.0, 1e-5), (4.0, 1e-9)]).with_labels(
+                vec!["euler".into(), "symplectic_euler".into(), "rk4".into()],
+            ),
+            Series::new("dt, rk4", vec![(4.0, 1e-9), (8.0, 1e-11)]),
+        ];
+        let mut plot = LinePlot::new("Work", "wall [s]", "error [m]", &series);
+        plot.x_scale = Scale::Log;
+        plot.y_scale = Scale::Log;
+        let svg = line_plot_svg(&plot).unwrap();
+        let blue = svg
+            .lines()
+            .filter(|l| l.contains("<polyline") && l.contains("#1F77B4"))
+            .count();
+        assert_eq!(blue, 0, "no line joins the integrators");
+        let red_lines = svg
+            .lines()
+            .filter(|l| l.contains("<polyline") && l.contains("#D62728"))
+            .count();
+        assert_eq!(red_lines, 2, "the dt sweep's line and its legend swatch");
+        assert_eq!(
+            svg.matches("<circle").count(),
+            3 + 1,
+            "markers and a swatch"
+        );
+        let texts = texts(&svg);
+        for label in ["euler", "symplectic_euler", "rk4", "integrator", "dt, rk4"] {
+            assert!(texts.iter().any(|t| t.2 == label), "missing {label:?}");
+        }
     }
 
     #[test]

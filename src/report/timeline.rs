@@ -692,6 +692,17 @@ mod tests {
         ] {
             assert!(svg.contains(text), "missing {text:?}");
         }
+        // The legend sits below the chart, under the x axis label, not over the lanes.
+        let texts = crate::report::tests_support::texts(&svg);
+        let y_of = |s: &str| texts.iter().find(|t| t.2 == s).map(|t| t.1);
+        let axis = y_of("time t [ms]").unwrap();
+        for entry in ["sync", "forces L1", "lost (collision)", "guard"] {
+            let y = y_of(entry).unwrap();
+            assert!(
+                y > axis,
+                "{entry} at y = {y}, above the axis label at {axis}"
+            );
+        }
         assert_eq!(net.lost(), 0, "no drift: nothing lost");
         // One box per frame in its kind's colour, plus the legend swatch.
         let sync = count(&reports, |f| f.kind == FrameKind::Sync);

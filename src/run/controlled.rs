@@ -284,6 +284,7 @@ fn write_surface(out: &Path, world: &CoSim, exp: &Experiment, names: &[String]) 
             path_overlay: &overlay,
             line_overlay: &[],
             categories: [None, None],
+            classes: None,
         },
     )
 }

@@ -113,6 +113,7 @@ pub(super) fn write(out: &Path, world: &CoSim, exp: &Experiment) -> Result<()> {
             path_overlay: &path,
             line_overlay: &budget,
             categories: [None, None],
+            classes: None,
         },
     )
 }

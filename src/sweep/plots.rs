@@ -335,6 +335,7 @@ fn heatmap(out: &Path, plan: &Plan, records: &[Record]) -> Result<()> {
             path_overlay: &[],
             line_overlay: &[],
             categories: [Some(&x_names), Some(&y_names)],
+            classes: None,
         },
     )
 }

@@ -41,6 +41,10 @@ pub struct Knob {
     pub when: &'static str,
     /// Whether the knob applies to the base scenario.
     pub applies: fn(&Scenario) -> bool,
+    /// Whether the settings are steps along one numeric scale (`dt`, a gain), so the
+    /// work-precision plot may join them by a line; categorical settings (integrators,
+    /// solvers, stabilizers) are drawn as separate markers.
+    pub ordered: bool,
     /// The settings around the base scenario.
     pub settings: fn(&Scenario) -> Vec<Setting>,
 }
@@ -260,12 +264,14 @@ pub const KNOBS: &[Knob] = &[
     Knob {
         name: "dt",
         when: "always",
+        ordered: true,
         applies: always,
         settings: |s| dt_settings(s, None),
     },
     Knob {
         name: "integrator",
         when: "always",
+        ordered: false,
         applies: always,
         settings: |_| {
             INTEGRATORS
@@ -277,24 +283,28 @@ pub const KNOBS: &[Knob] = &[
     Knob {
         name: "dt, euler",
         when: "the base integrator is not euler",
+        ordered: true,
         applies: |s| s.integrator != Integrator::Euler,
         settings: |s| dt_settings(s, Some(Integrator::Euler)),
     },
     Knob {
         name: "dt, symplectic_euler",
         when: "the base integrator is not symplectic_euler",
+        ordered: true,
         applies: |s| s.integrator != Integrator::SymplecticEuler,
         settings: |s| dt_settings(s, Some(Integrator::SymplecticEuler)),
     },
     Knob {
         name: "dt, rk4",
         when: "the base integrator is not rk4",
+        ordered: true,
         applies: |s| s.integrator != Integrator::Rk4,
         settings: |s| dt_settings(s, Some(Integrator::Rk4)),
     },
     Knob {
         name: "solver",
         when: "always",
+        ordered: false,
         applies: always,
         settings: |_| {
             let mut v = vec![Setting::new(
@@ -316,6 +326,7 @@ pub const KNOBS: &[Knob] = &[
     Knob {
         name: "stabilizer",
         when: "always",
+        ordered: false,
         applies: always,
         settings: |s| {
             let (mu, k, epsilon) = match s.stabilizer {
@@ -348,6 +359,7 @@ pub const KNOBS: &[Knob] = &[
     Knob {
         name: "smc K",
         when: "the stabilizer is smc",
+        ordered: true,
         applies: smc,
         settings: |s| {
             let Stabilizer::Smc { mu, epsilon, .. } = s.stabilizer else {
@@ -370,6 +382,7 @@ pub const KNOBS: &[Knob] = &[
     Knob {
         name: "ghosts",
         when: "the scenario is partitioned",
+        ordered: false,
         applies: partitioned,
         settings: |_| {
             ["integrate", "hold"]
@@ -381,6 +394,7 @@ pub const KNOBS: &[Knob] = &[
     Knob {
         name: "network",
         when: "the scenario is partitioned",
+        ordered: false,
         applies: partitioned,
         settings: network_settings,
     },

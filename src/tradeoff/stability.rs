@@ -19,7 +19,7 @@ use crate::cosim::{CoSim, Observer, StepValues};
 use crate::error::{Error, Result};
 use crate::kernel::SimTime;
 use crate::output::{create_dir_all, write_atomic};
-use crate::report::{write_heatmap, Heatmap};
+use crate::report::{write_heatmap, CellClass, Heatmap};
 use crate::scenario::model::Stabilizer;
 use crate::scenario::parse_str;
 
@@ -160,6 +160,23 @@ pub fn stability_map(path: &Path, out: &Path, duration: Option<f64>) -> Result<S
     Ok(map)
 }
 
+/// The outcomes 0, 1, 2 as the map's legend names and colours them (blue, orange,
+/// dark red: apart in hue and in lightness, so also in grey); refused cells are grey.
+const OUTCOMES: [CellClass<'static>; 3] = [
+    CellClass {
+        name: "0: ran, max |w| ≤ ε",
+        rgb: [0x2c, 0x7f, 0xb8],
+    },
+    CellClass {
+        name: "1: ran, max |w| > ε",
+        rgb: [0xfd, 0xb8, 0x63],
+    },
+    CellClass {
+        name: "2: diverged",
+        rgb: [0x7f, 0x00, 0x00],
+    },
+];
+
 fn write_map(out: &Path, map: &StabilityMap) -> Result<()> {
     create_dir_all(out)?;
     let mut csv = String::from("mu,dt,outcome,max_violation,error\n");
@@ -203,13 +220,14 @@ fn write_map(out: &Path, map: &StabilityMap) -> Result<()> {
             title: &title,
             x_label: "log10 dt [s]",
             y_label: "log10 μ [s]",
-            value_label: "0 |w| ≤ ε · 1 |w| > ε · 2 diverged",
+            value_label: "outcome of the run",
             x: &x,
             y: &y,
             values: &outcome,
             path_overlay: &[],
             line_overlay: &[],
             categories: [None, None],
+            classes: Some(&OUTCOMES),
         },
     )?;
     let max_w = grid(&|c| match c.outcome {
@@ -233,6 +251,7 @@ fn write_map(out: &Path, map: &StabilityMap) -> Result<()> {
             path_overlay: &[],
             line_overlay: &[],
             categories: [None, None],
+            classes: None,
         },
     )
 }
@@ -284,5 +303,59 @@ fn trim_time(t: &str) -> &str {
         t.trim_end_matches('0').trim_end_matches('.')
     } else {
         t
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_map_names_its_three_outcomes_in_a_legend() {
+        let cells = MU
+            .iter()
+            .enumerate()
+            .flat_map(|(i, &mu)| {
+                DT.iter().enumerate().map(move |(j, &dt)| Cell {
+                    mu,
+                    dt,
+                    outcome: match (i + j) % 4 {
+                        3 => None,
+                        o => Some(o as u8),
+                    },
+                    max_violation: 1e-3,
+                    error: String::new(),
+                })
+            })
+            .collect();
+        let map = StabilityMap {
+            name: "tiny".into(),
+            horizon: SimTime::from_secs_f64(0.01).unwrap(),
+            integrator: "euler",
+            k: 10.0,
+            epsilon: 0.1,
+            bound: 1.0,
+            cells,
+        };
+        let dir = std::env::temp_dir().join(format!("dsmcosim-stability-{}", std::process::id()));
+        write_map(&dir, &map).unwrap();
+        let svg = std::fs::read_to_string(dir.join("stability_map.svg")).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        let texts: Vec<&str> = svg.lines().map(str::trim).collect();
+        for class in &OUTCOMES {
+            // plotters escapes `<`, `>` and `&` in text.
+            let name = class.name.replace('>', "&gt;").replace('<', "&lt;");
+            assert!(texts.contains(&name.as_str()), "missing {name:?}");
+            let [r, g, b] = class.rgb;
+            assert!(svg.contains(&format!("fill=\"#{r:02X}{g:02X}{b:02X}\"")));
+        }
+        for text in [
+            "no value",
+            "outcome of the run",
+            "log10 dt [s]",
+            "log10 μ [s]",
+        ] {
+            assert!(texts.contains(&text), "missing {text:?}");
+        }
     }
 }
