@@ -18,7 +18,7 @@
 //! becomes a `Slot` event at its actual start that samples what the sender has then
 //! and schedules the `Delivery` of its messages (nothing for a lost frame).
 //!
-//! Within a [`EventClass`] at equal time events leave FIFO, so channels sample in
+//! Within a [`crate::kernel::EventClass`] at equal time events leave FIFO, so channels sample in
 //! channel order and messages arrive in the order they were sent. Nodes step in node
 //! order inside one `PartitionStep` event; they share nothing during a step, so the
 //! order cannot change a bit of the result.

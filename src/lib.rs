@@ -48,7 +48,8 @@
 
 #![warn(missing_docs)]
 // Physical fields carry their unit in brackets (`[s]`, `[m]`); rustdoc would read those
-// as links.
+// as links. Every unresolved "link" is such a unit: with this line removed, `cargo doc`
+// lists 237, all of them `[s]`, `[m]`, `[ns]`, `[N]`, … and no item name.
 #![allow(rustdoc::broken_intra_doc_links)]
 
 pub mod check;

@@ -87,7 +87,7 @@ pub enum SimplexError {
     BadTolerance(f64),
 }
 
-/// The error of [`Dsm::new`] (the same type serves both optimizers).
+/// The error of [`super::Dsm::new`] (the same type serves both optimizers).
 pub type DsmError = SimplexError;
 
 /// The feasible set: a box `lower ≤ x ≤ upper` and optionally a linear budget on the
