@@ -38,9 +38,14 @@ pub struct Recorder {
     /// beside them.
     dynamics: Digest,
     rows: u64,
-    /// Per link (small models) then the envelope `max |w|` as peak series; x, y, z of
-    /// each plotted body as first series. Bounded in length whatever the horizon.
+    /// Per link (models of at most [`MAX_PLOTTED_LINKS`] links) then the envelope `max |w|`
+    /// as peak series, or (larger models) the largest, smallest and RMS `w` over the
+    /// links; x, y, z of each plotted body as first series. Bounded in length whatever
+    /// the horizon.
     plots: PlotSamples,
+    /// Larger models: each link's largest `|w|` over every step so far, to name the
+    /// worst links in the plot.
+    link_peaks: Vec<f64>,
     /// network.csv and the timeline cycles, on a TDMA scene.
     network: Option<NetworkLog>,
 }
@@ -67,7 +72,19 @@ impl Recorder {
             epochs: Digest::new(),
             dynamics: Digest::new(),
             rows: 0,
-            plots: PlotSamples::new(plotted_links(link_count) + 1, 3 * plot_bodies.len()),
+            plots: PlotSamples::new(
+                if link_count > MAX_PLOTTED_LINKS {
+                    3
+                } else {
+                    link_count + 1
+                },
+                3 * plot_bodies.len(),
+            ),
+            link_peaks: if link_count > MAX_PLOTTED_LINKS {
+                vec![0.0; link_count]
+            } else {
+                Vec::new()
+            },
             network: None,
         };
         if let Some(f) = &mut r.file {
@@ -103,19 +120,33 @@ impl Recorder {
             d.values(v.as_slice());
         }
         d.end_step();
+        for (peak, w) in self.link_peaks.iter_mut().zip(s.w) {
+            *peak = peak.max(w.abs());
+        }
         if !s.step.is_multiple_of(self.decimation) && !s.last {
             return Ok(());
         }
         self.rows += 1;
         let t = s.time.as_secs_f64();
-        let envelope = s.w.iter().fold(0.0, |m: f64, w| m.max(w.abs()));
-        let links = s.w[..plotted_links(self.link_count)].iter().copied();
         let bodies = self
             .plot_bodies
             .iter()
             .flat_map(|&(i, _)| (0..3).map(move |ax| s.p[i][ax]));
-        self.plots
-            .push(t, links.chain(std::iter::once(envelope)), bodies);
+        if self.link_peaks.is_empty() {
+            let envelope = s.w.iter().fold(0.0, |m: f64, w| m.max(w.abs()));
+            let links = s.w.iter().copied();
+            self.plots
+                .push(t, links.chain(std::iter::once(envelope)), bodies);
+        } else {
+            let (mut max, mut min, mut squares) = (f64::NEG_INFINITY, f64::INFINITY, 0.0);
+            for &w in s.w {
+                max = max.max(w);
+                min = min.min(w);
+                squares += w * w;
+            }
+            let rms = (squares / s.w.len().max(1) as f64).sqrt();
+            self.plots.push(t, [max, min, rms], bodies);
+        }
         let Some(file) = &mut self.file else {
             return Ok(());
         };
@@ -213,16 +244,42 @@ impl Recorder {
     }
 
     /// Series for the constraint plot: one per link (small models) or the envelope.
+    ///
+    /// Past [`MAX_PLOTTED_LINKS`] links the recorder keeps the envelope only: one series,
+    /// the RMS of `w` over the links with a band from the smallest to the largest, whose
+    /// label names the [`WORST_NAMED`] links of largest `|w|` over the run with that value.
     pub fn constraint_series(&self) -> Vec<Series> {
         let p = &self.plots;
-        let links = plotted_links(self.link_count);
-        if links == 0 {
+        if !self.link_peaks.is_empty() {
+            let band = p
+                .times
+                .iter()
+                .zip(&p.peaks[0])
+                .zip(&p.peaks[1])
+                .map(|((&t, &max), &min)| (t, min, max))
+                .collect();
+            let mut order: Vec<usize> = (0..self.link_peaks.len()).collect();
+            order.sort_by(|&a, &b| {
+                self.link_peaks[b]
+                    .total_cmp(&self.link_peaks[a])
+                    .then(a.cmp(&b))
+            });
+            let worst: Vec<String> = order
+                .iter()
+                .take(WORST_NAMED)
+                .map(|&k| format!("L{} {:.3} m", k + 1, self.link_peaks[k]))
+                .collect();
             return vec![Series::new(
-                format!("max over {} links of |w|", self.link_count),
-                zip(&p.times, &p.peaks[0]),
-            )];
+                format!(
+                    "RMS of {} links, band min–max; largest |w|: {}",
+                    self.link_count,
+                    worst.join(", ")
+                ),
+                zip(&p.times, &p.peaks[2]),
+            )
+            .with_band(band)];
         }
-        p.peaks[..links]
+        p.peaks[..self.link_count]
             .iter()
             .enumerate()
             .map(|(k, s)| Series::new(format!("L{}", k + 1), zip(&p.times, s)))
@@ -300,13 +357,8 @@ impl Observer for Recorder {
 
 /// Links with their own series in the constraint plot (none on larger models, which
 /// plot the envelope only).
-fn plotted_links(link_count: usize) -> usize {
-    if link_count > MAX_PLOTTED_LINKS {
-        0
-    } else {
-        link_count
-    }
-}
+/// Links named by their largest `|w|` in the envelope of a larger model.
+pub const WORST_NAMED: usize = 4;
 
 fn zip(t: &[f64], y: &[f64]) -> Vec<(f64, f64)> {
     t.iter().copied().zip(y.iter().copied()).collect()
@@ -314,6 +366,48 @@ fn zip(t: &[f64], y: &[f64]) -> Vec<(f64, f64)> {
 
 #[cfg(test)]
 mod tests {
+
+    /// Past MAX_PLOTTED_LINKS links the plot keeps the envelope: the RMS with a band from
+    /// the smallest to the largest w at each row, and names the links of largest |w|
+    /// over every step (also between plotted rows).
+    #[test]
+    fn a_large_model_plots_the_envelope_and_names_its_worst_links() {
+        let n = MAX_PLOTTED_LINKS + 6;
+        let mut r = Recorder::new(None, 2, n, &[1], &[], &[]).unwrap();
+        let zero = nalgebra::Vector3::zeros();
+        let (f, p, v) = (vec![0.0; n], vec![zero; 1], vec![zero; 1]);
+        for step in 0..4u64 {
+            let mut w = vec![0.01; n];
+            w[3] = -0.5; // the largest magnitude, on plotted rows
+            if step == 1 {
+                w[20] = 0.9; // larger still, on a row the plot skips (decimation 2)
+            }
+            r.record(&StepValues {
+                step,
+                time: SimTime(step * 1_000_000),
+                last: step == 3,
+                w: &w,
+                f: &f,
+                p: &p,
+                v: &v,
+            })
+            .unwrap();
+        }
+        let series = r.constraint_series();
+        assert_eq!(series.len(), 1);
+        let label = &series[0].label;
+        assert!(
+            label.starts_with(&format!(
+                "RMS of {n} links, band min–max; largest |w|: L21 0.900 m, L4 0.500 m"
+            )),
+            "{label}"
+        );
+        // Rows 0, 2 and the last (3): band [-0.5, 0.01], RMS of one -0.5 and n-1 times 0.01.
+        let rms = ((0.25 + (n - 1) as f64 * 1e-4) / n as f64).sqrt();
+        assert_eq!(series[0].points.len(), 3);
+        assert!((series[0].points[0].1 - rms).abs() < 1e-15);
+        assert_eq!((series[0].band[0].1, series[0].band[0].2), (-0.5, 0.01));
+    }
     use super::*;
     use crate::control::experiment::{BaselineResult, Candidate};
     use crate::kernel::SimTime;
