@@ -14,6 +14,7 @@
 //! against.
 
 mod cg;
+mod ordered;
 
 use std::collections::BTreeMap;
 
@@ -88,6 +89,12 @@ struct Exact {
     /// small systems (a node of a partitioned run), where the sparse bookkeeping costs
     /// more than the arithmetic.
     dense: Option<Vec<f64>>,
+    /// `cholesky_amd`: factorize in an AMD order (faer) instead of the link order.
+    amd: bool,
+    /// The ordered factorization, analysed on first use (again after a checkpoint
+    /// restore: the same AMD order, so the same bits).
+    #[serde(skip)]
+    ordered: ordered::Slot,
 }
 
 /// Systems with at most this many links use the dense in-place Cholesky.
@@ -108,7 +115,8 @@ impl JsSolver {
     /// Prepares a solver for `bodies` bodies and links with the given ends.
     pub fn new(kind: Solver, bodies: usize, ends: &[(usize, usize)]) -> JsSolver {
         let (exact, cg) = match kind {
-            Solver::Cholesky => (Some(Exact::new(bodies, ends)), None),
+            Solver::Cholesky => (Some(Exact::new(bodies, ends, false)), None),
+            Solver::OrderedCholesky => (Some(Exact::new(bodies, ends, true)), None),
             Solver::ConjugateGradient {
                 max_iterations,
                 tolerance,
@@ -212,7 +220,7 @@ impl Exact {
             .fold(0.0, f64::max)
     }
 
-    fn new(bodies: usize, ends: &[(usize, usize)]) -> Exact {
+    fn new(bodies: usize, ends: &[(usize, usize)], amd: bool) -> Exact {
         let m = ends.len();
         // Links incident to each body, in link order (deterministic).
         let mut incident: Vec<Vec<(usize, Side)>> = vec![Vec::new(); bodies];
@@ -274,6 +282,8 @@ impl Exact {
             factor: None,
             rhs: DVector::zeros(m),
             dense: dense.then(|| vec![0.0; m * m]),
+            amd,
+            ordered: ordered::Slot::default(),
         }
     }
 
@@ -305,6 +315,21 @@ impl Exact {
         self.assemble(geo, mass);
         if let Some(a) = &mut self.dense {
             return dense_cholesky_solve(a, b, x);
+        }
+        if self.amd {
+            let (offsets, rows) = (self.pattern.major_offsets(), self.pattern.minor_indices());
+            let n = offsets.len() - 1;
+            if self.ordered.0.is_none() {
+                self.ordered.0 = ordered::Ordered::new(n, offsets, rows);
+            }
+            let Some(o) = &mut self.ordered.0 else {
+                return Err(SolveError::NotPositiveDefinite);
+            };
+            return if o.solve(n, offsets, rows, &self.values, b, x) {
+                Ok(())
+            } else {
+                Err(SolveError::NotPositiveDefinite)
+            };
         }
         let refactored = match &mut self.factor {
             Some(f) => f.refactor(&self.values).is_ok(),

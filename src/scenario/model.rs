@@ -59,6 +59,9 @@ pub enum Stabilizer {
 pub enum Solver {
     /// Exact sparse Cholesky factorization (symbolic pattern computed once per run).
     Cholesky,
+    /// The exact solve in an approximate-minimum-degree order (faer): the symbolic
+    /// analysis once per topology, the numeric factorization every step.
+    OrderedCholesky,
     /// Jacobi-preconditioned conjugate gradient, warm-started from the previous solution.
     ConjugateGradient {
         /// Iteration budget per solve.

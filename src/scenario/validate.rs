@@ -364,14 +364,23 @@ fn stabilizer(s: &StabilizerFile) -> Result<Stabilizer> {
 /// The `solver` section.
 fn solver(s: &SolverFile) -> Result<Solver> {
     match s.kind {
-        SolverKind::Cholesky => {
+        SolverKind::Cholesky | SolverKind::CholeskyAmd => {
+            let name = if s.kind == SolverKind::Cholesky {
+                "cholesky"
+            } else {
+                "cholesky_amd"
+            };
             if s.max_iterations.is_some() {
-                return Err(foreign("solver.max_iterations", "cholesky"));
+                return Err(foreign("solver.max_iterations", name));
             }
             if s.tolerance.is_some() {
-                return Err(foreign("solver.tolerance", "cholesky"));
+                return Err(foreign("solver.tolerance", name));
             }
-            Ok(Solver::Cholesky)
+            Ok(if s.kind == SolverKind::Cholesky {
+                Solver::Cholesky
+            } else {
+                Solver::OrderedCholesky
+            })
         }
         SolverKind::Cg => {
             let max_iterations = s.max_iterations.unwrap_or(DEFAULT_CG_MAX_ITERATIONS);

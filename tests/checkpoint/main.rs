@@ -114,6 +114,10 @@ fn sparse_solver_run_resumes_bit_for_bit() {
         "output": {"decimation": 50}
     });
     check_resume("sparse", &v, 0.4, 2);
+    // The AMD-ordered exact solve: its factorization is analysed again after a restore.
+    let mut amd = v.clone();
+    amd["solver"] = json!({"kind": "cholesky_amd"});
+    check_resume("sparse_amd", &amd, 0.4, 2);
 }
 
 #[test]
