@@ -98,6 +98,27 @@ fn text_width(text: &str, size: f64) -> u32 {
 /// Helpers for tests that read the SVG text of a plot.
 #[cfg(test)]
 pub(crate) mod tests_support {
+    /// `(x, width, fill)` of every `<rect>` (plotters writes x, y, width, height,
+    /// opacity, fill in this order).
+    pub(crate) fn rects(svg: &str) -> Vec<(i32, i32, String)> {
+        let attr = |tag: &str, name: &str| -> Option<String> {
+            let at = tag.find(&format!(" {name}=\""))? + name.len() + 3;
+            let len = tag[at..].find('"')?;
+            Some(tag[at..at + len].to_string())
+        };
+        svg.split("<rect")
+            .skip(1)
+            .filter_map(|rest| {
+                let tag = &rest[..rest.find('>')?];
+                Some((
+                    attr(tag, "x")?.parse().ok()?,
+                    attr(tag, "width")?.parse().ok()?,
+                    attr(tag, "fill")?,
+                ))
+            })
+            .collect()
+    }
+
     /// `(x, y, text)` of every `<text>` element (plotters writes the text on its own
     /// line between the tag and `</text>`).
     pub(crate) fn texts(svg: &str) -> Vec<(i32, i32, String)> {

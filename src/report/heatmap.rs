@@ -522,26 +522,6 @@ mod tests {
         }
     }
 
-    /// `(x, width, fill)` of every `<rect>`.
-    fn rects(svg: &str) -> Vec<(i32, i32, String)> {
-        let attr = |tag: &str, name: &str| -> Option<String> {
-            let at = tag.find(&format!(" {name}=\""))? + name.len() + 3;
-            let len = tag[at..].find('"')?;
-            Some(tag[at..at + len].to_string())
-        };
-        svg.split("<rect")
-            .skip(1)
-            .filter_map(|rest| {
-                let tag = &rest[..rest.find('>')?];
-                Some((
-                    attr(tag, "x")?.parse().ok()?,
-                    attr(tag, "width")?.parse().ok()?,
-                    attr(tag, "fill")?,
-                ))
-            })
-            .collect()
-    }
-
     #[test]
     fn categorical_map_has_a_legend_of_classes_beside_the_cells() {
         let classes = [
@@ -574,7 +554,7 @@ mod tests {
         for name in ["stable", "diverged", "no value", "outcome", "log10 dt [s]"] {
             assert!(texts.iter().any(|t| t.2 == name), "missing {name:?}");
         }
-        let boxes = rects(&svg);
+        let boxes = crate::report::tests_support::rects(&svg);
         let filled = |fill: &str| boxes.iter().filter(|r| r.2 == fill).count();
         // Cells plus one legend swatch each; no colour bar of viridis strips.
         assert_eq!(filled("#2C7FB8"), 2 + 1);
@@ -606,7 +586,9 @@ mod tests {
             ..map
         })
         .unwrap();
-        assert!(!svg.contains("stable") && rects(&svg).len() > BAR_STEPS);
+        assert!(
+            !svg.contains("stable") && crate::report::tests_support::rects(&svg).len() > BAR_STEPS
+        );
     }
 
     #[test]

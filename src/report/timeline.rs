@@ -632,20 +632,11 @@ mod tests {
         }
     }
 
-    /// `(width, fill)` of every `<rect>` (plotters writes x, y, width, height, opacity,
-    /// fill in this order).
+    /// `(width, fill)` of every `<rect>`.
     fn rects(svg: &str) -> Vec<(i32, String)> {
-        let attr = |tag: &str, name: &str| -> Option<String> {
-            let at = tag.find(&format!(" {name}=\""))? + name.len() + 3;
-            let len = tag[at..].find('"')?;
-            Some(tag[at..at + len].to_string())
-        };
-        svg.split("<rect")
-            .skip(1)
-            .filter_map(|rest| {
-                let tag = &rest[..rest.find('>')?];
-                Some((attr(tag, "width")?.parse().ok()?, attr(tag, "fill")?))
-            })
+        crate::report::tests_support::rects(svg)
+            .into_iter()
+            .map(|(_, width, fill)| (width, fill))
             .collect()
     }
 

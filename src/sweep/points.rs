@@ -9,21 +9,35 @@ use super::file::{AxisFile, Combine, SweepFile};
 use super::pointer::Pointer;
 use crate::error::{Error, Result};
 
-/// CSV columns an axis may not be named (nor start with `mean_cost_` or `tau_`).
-const RESERVED: [&str; 12] = [
-    "point",
-    "index",
-    "rep",
+/// `sweep.csv`'s fixed columns, in the groups it writes them ([`super::table`]): before
+/// the axes; after them (and `rep`); after `mean_cost_<method>`; last. With `rep` and
+/// the `mean_cost_` and `tau_` prefixes they are the names an axis may not take.
+pub const LEADING_COLUMNS: [&str; 2] = ["index", "point"];
+/// See [`LEADING_COLUMNS`].
+pub const STATUS_COLUMNS: [&str; 6] = [
     "seed",
     "status",
     "diverged_at",
     "diverged_node",
     "diverged_where",
     "mean_cost",
-    "lost_frames",
-    "bandwidth",
-    "digest",
 ];
+/// See [`LEADING_COLUMNS`].
+pub const LOSS_COLUMN: &str = "lost_frames";
+/// See [`LEADING_COLUMNS`].
+pub const TRAILING_COLUMNS: [&str; 2] = ["bandwidth", "digest"];
+
+/// Whether `name` is a column `sweep.csv` already has.
+fn reserved(name: &str) -> bool {
+    LEADING_COLUMNS
+        .iter()
+        .chain(&STATUS_COLUMNS)
+        .chain(&TRAILING_COLUMNS)
+        .chain(&["rep", LOSS_COLUMN])
+        .any(|&c| c == name)
+        || name.starts_with("mean_cost_")
+        || name.starts_with("tau_")
+}
 
 /// One checked axis.
 #[derive(Debug, Clone, PartialEq)]
@@ -184,10 +198,7 @@ fn axis(k: usize, a: &AxisFile, earlier: &[Axis]) -> Result<Axis> {
             format!("must be non-empty [A-Za-z0-9_.-] (got {:?})", a.name),
         ));
     }
-    if RESERVED.contains(&a.name.as_str())
-        || a.name.starts_with("mean_cost_")
-        || a.name.starts_with("tau_")
-    {
+    if reserved(&a.name) {
         return Err(Error::invalid(
             at("name"),
             format!("`{}` is a column sweep.csv already has", a.name),

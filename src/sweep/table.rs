@@ -20,7 +20,7 @@
 
 use std::collections::BTreeSet;
 
-use super::points::Plan;
+use super::points::{Plan, LEADING_COLUMNS, LOSS_COLUMN, STATUS_COLUMNS, TRAILING_COLUMNS};
 use super::record::Record;
 use crate::output::csv_text;
 
@@ -46,29 +46,19 @@ pub fn sweep_csv(plan: &Plan, records: &[Record]) -> String {
             }
         }
     }
-    let mut header = vec!["index".to_string(), "point".to_string()];
+    let mut header: Vec<String> = LEADING_COLUMNS.map(String::from).to_vec();
     header.extend(plan.axes.iter().map(|a| a.name.clone()));
     if plan.repeat > 1 {
         header.push("rep".into());
     }
-    header.extend(
-        [
-            "seed",
-            "status",
-            "diverged_at",
-            "diverged_node",
-            "diverged_where",
-            "mean_cost",
-        ]
-        .map(String::from),
-    );
+    header.extend(STATUS_COLUMNS.map(String::from));
     header.extend(methods.iter().map(|m| format!("mean_cost_{m}")));
-    header.push("lost_frames".into());
+    header.push(LOSS_COLUMN.into());
     for c in &channels {
         header.push(format!("tau_{c}_requested"));
         header.push(format!("tau_{c}_achieved"));
     }
-    header.extend(["bandwidth", "digest"].map(String::from));
+    header.extend(TRAILING_COLUMNS.map(String::from));
     let mut rows = vec![header];
     for r in records {
         let row = &r.row;

@@ -30,6 +30,19 @@ pub(super) fn bounded(args: &[&str], limit: Duration) -> Output {
     child.wait_with_output().expect("output")
 }
 
+/// Runs the sweep `sweep` (written into `dir`) into `dir/out`, bounded in time.
+fn sweep_in(dir: &Path, sweep: &Value) -> (Output, std::path::PathBuf) {
+    let file = write_json(dir, "sweep.json", sweep);
+    let out = dir.join("out");
+    let args = [
+        "sweep",
+        file.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    (bounded(&args, Duration::from_secs(20)), out)
+}
+
 /// `validate` and `run` both exit 2 naming `field` (and `what`), and `run` writes
 /// nothing.
 fn refused(dir: &Path, name: &str, v: &Value, field: &str, what: &str) {
@@ -134,17 +147,7 @@ fn a_sweep_axis_of_a_billion_steps_is_refused_before_anything_is_allocated() {
         "axes": [{"name": "k", "pointer": "/stabilizer/k",
                   "range": {"from": 1.0, "to": 10.0, "steps": 1_000_000_000}}]
     });
-    let file = write_json(&dir, "sweep.json", &sweep);
-    let out = dir.join("out");
-    let o = bounded(
-        &[
-            "sweep",
-            file.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ],
-        Duration::from_secs(20),
-    );
+    let (o, out) = sweep_in(&dir, &sweep);
     assert_eq!(o.status.code(), Some(2), "{}", said(&o));
     assert!(said(&o).contains("range.steps"), "{}", said(&o));
     assert!(!out.exists(), "nothing written");
@@ -214,17 +217,7 @@ fn a_sweep_point_that_run_would_refuse_is_refused_before_any_point_runs() {
         "name": "ds", "base": "base.json",
         "axes": [{"name": "D_s", "pointer": "/controller/dsm/size", "values": [0.002, 0.2]}]
     });
-    let file = write_json(&dir, "sweep.json", &sweep);
-    let out = dir.join("out");
-    let o = bounded(
-        &[
-            "sweep",
-            file.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ],
-        Duration::from_secs(20),
-    );
+    let (o, out) = sweep_in(&dir, &sweep);
     assert_eq!(o.status.code(), Some(2), "{}", said(&o));
     assert!(
         said(&o).contains("point p1") && said(&o).contains("cannot start the simplex"),
