@@ -46,7 +46,7 @@ pub struct Outcome {
     pub messages: u64,
     /// Kernel events processed.
     pub events: u64,
-    /// BLAKE3 (hex) of the bytes of trace.csv as written. The run digest covers the
+    /// BLAKE3 (hex) of the bytes of trace.csv, hashed as they are written. The run digest covers the
     /// bits of every step, not the text of the decimated rows; this one covers the text,
     /// so a resumed run whose checkpoint carried edited trace lines shows a different
     /// `trace_digest` from the uninterrupted run's even where `digest` agrees.
@@ -135,20 +135,6 @@ pub fn resume(path: &Path, out: &Path, options: RunOptions) -> Result<Outcome> {
     finish(out, cp.world, recorder, cp.controller, options)
 }
 
-/// BLAKE3 (hex) of a file's bytes, read in chunks; `None` if there is no such file.
-fn file_digest(path: &Path) -> Result<Option<String>> {
-    let file = match std::fs::File::open(path) {
-        Ok(f) => f,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        Err(e) => return Err(Error::io(path, e)),
-    };
-    let mut hasher = blake3::Hasher::new();
-    hasher
-        .update_reader(std::io::BufReader::new(file))
-        .map_err(|e| Error::io(path, e))?;
-    Ok(Some(hasher.finalize().to_hex().to_string()))
-}
-
 /// Runs the world from where it is to its end, then writes every output.
 fn finish(
     out: &Path,
@@ -160,8 +146,8 @@ fn finish(
     let started = Instant::now();
     let result = drive(out, &mut world, &mut recorder, controller.as_mut(), options);
     let wall_seconds = started.elapsed().as_secs_f64();
+    let trace_digest = recorder.trace_digest();
     recorder.commit()?;
-    let trace_digest = file_digest(&out.join("trace.csv"))?;
     let experiment = controller.map(|c| c.experiment).unwrap_or_default();
     let outcome = Outcome {
         trace_digest,

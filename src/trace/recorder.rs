@@ -30,6 +30,10 @@ pub struct Recorder {
     file: Option<AtomicFile>,
     #[serde(skip)]
     line: String,
+    /// BLAKE3 of every byte written to trace.csv so far (a restored recorder hashes its
+    /// kept lines again as it writes them to the new file).
+    #[serde(skip)]
+    text_hash: blake3::Hasher,
     /// Every trace line written so far, kept when checkpoints are written.
     kept: Option<String>,
     /// The epoch chain: every epochs.csv row (see [`super::digest`]).
@@ -68,6 +72,7 @@ impl Recorder {
             plot_bodies: plot_bodies.iter().map(|&i| (i, body_ids[i])).collect(),
             file,
             line: String::new(),
+            text_hash: blake3::Hasher::new(),
             kept: None,
             epochs: Digest::new(),
             dynamics: Digest::new(),
@@ -101,8 +106,9 @@ impl Recorder {
                     head.push_str(&format!(",{ax}_B{id}"));
                 }
             }
-            writeln!(f, "{head}")?;
             r.line = format!("{head}\n");
+            f.write_all(r.line.as_bytes())?;
+            r.text_hash.update(r.line.as_bytes());
         }
         Ok(r)
     }
@@ -173,6 +179,7 @@ impl Recorder {
         if let Some(kept) = &mut self.kept {
             kept.push_str(&self.line);
         }
+        self.text_hash.update(self.line.as_bytes());
         file.write_all(self.line.as_bytes())
     }
 
@@ -227,9 +234,19 @@ impl Recorder {
     pub fn reattach(&mut self, mut file: AtomicFile) -> std::io::Result<()> {
         if let Some(kept) = &self.kept {
             file.write_all(kept.as_bytes())?;
+            self.text_hash = blake3::Hasher::new();
+            self.text_hash.update(kept.as_bytes());
         }
         self.file = Some(file);
         Ok(())
+    }
+
+    /// BLAKE3 (hex) of the bytes written to trace.csv; `None` for a recorder without a
+    /// trace file.
+    pub fn trace_digest(&self) -> Option<String> {
+        self.file
+            .as_ref()
+            .map(|_| self.text_hash.finalize().to_hex().to_string())
     }
 
     /// Closes the trace file (renaming it into place).
