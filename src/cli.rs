@@ -339,6 +339,7 @@ fn run_options(
         checkpoint_every,
         force,
         limits: limits.limits(),
+        ..Default::default()
     })
 }
 

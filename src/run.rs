@@ -64,6 +64,9 @@ pub struct RunOptions {
     pub force: bool,
     /// Bounds on steps, output and checkpoints ([`budget`]).
     pub limits: budget::Limits,
+    /// Write no trace.csv and network.csv (a sweep point with `--keep summary`): the
+    /// digests are the same, `trace_digest` is absent.
+    pub skip_trace_files: bool,
 }
 
 /// Runs `scenario` and writes its outputs into `out`.
@@ -85,10 +88,14 @@ pub fn run_with(scenario: &Scenario, out: &Path, options: RunOptions) -> Result<
     let controller = preflight(scenario, &options)?;
     let _dir = claim(out, &scenario.name, options.force)?;
     let trace_path = out.join("trace.csv");
-    let file = AtomicFile::create(&trace_path)?;
+    let file = if options.skip_trace_files {
+        None
+    } else {
+        Some(AtomicFile::create(&trace_path)?)
+    };
     let ids: Vec<u32> = scenario.bodies.iter().map(|b| b.id).collect();
     let mut recorder = Recorder::new(
-        Some(file),
+        file,
         scenario.output.decimation,
         scenario.links.len(),
         &ids,
@@ -100,8 +107,13 @@ pub fn run_with(scenario: &Scenario, out: &Path, options: RunOptions) -> Result<
     if world.tdma().is_some() {
         let path = out.join("network.csv");
         let names = scenario.channels.iter().map(|c| c.name.clone()).collect();
+        let file = if options.skip_trace_files {
+            None
+        } else {
+            Some(AtomicFile::create(&path)?)
+        };
         let log = NetworkLog::new(
-            Some(AtomicFile::create(&path)?),
+            file,
             scenario.output.network_decimation,
             scenario.output.timeline_cycles,
             names,

@@ -330,7 +330,13 @@ fn run_point(out: &Path, loaded: &Loaded, p: &Point, keep: Keep) -> Result<()> {
     let label = format!("{}_{}", loaded.plan.name, p.key);
     let scenario = crate::scenario::parse_str(&p.text, &label)?;
     let started = Instant::now();
-    match crate::progress::quietly(|| crate::run::run(&scenario, &dir)) {
+    // `--keep summary` drops the trace files: they are never written, not written and
+    // removed.
+    let options = crate::run::RunOptions {
+        skip_trace_files: keep == Keep::Summary,
+        ..Default::default()
+    };
+    match crate::progress::quietly(|| crate::run::run_with(&scenario, &dir, options)) {
         Ok(_) | Err(Error::Diverged(_) | Error::Numerical { .. }) => {}
         Err(Error::Invalid { path, message }) => {
             return Err(Error::invalid(
