@@ -96,6 +96,31 @@ impl crate::control::Plant for CoSim {
     }
 }
 
+/// The channels of `scenario` over `layout`'s routes and, on a TDMA network, the
+/// network with its initial slot list, each channel's period set to what that list
+/// achieves (`u64::MAX` ns for a channel a sender of which it never serves).
+pub fn network_of(
+    scenario: &Scenario,
+    layout: &Layout,
+) -> std::result::Result<(Vec<Channel>, Option<TdmaLink>), TdmaError> {
+    let mut channels: Vec<Channel> = scenario
+        .channels
+        .iter()
+        .map(|c| Channel::new(c, &layout.routes))
+        .collect();
+    let tdma = match &scenario.network {
+        NetworkSpec::Ideal => None,
+        NetworkSpec::Tdma(_) => {
+            let link = TdmaLink::new(scenario, &channels)?;
+            for (ch, tau) in channels.iter_mut().zip(link.nominal_periods()) {
+                ch.tau = tau;
+            }
+            Some(link)
+        }
+    };
+    Ok((channels, tdma))
+}
+
 /// A watcher that watches nothing.
 impl Observer for () {
     fn on_step(&mut self, _: &StepValues) -> std::io::Result<()> {
@@ -157,11 +182,8 @@ impl CoSim {
         let nodes: Vec<Node> = (0..layout.nodes)
             .map(|n| Node::new(scenario, &layout, n))
             .collect();
-        let channels: Vec<Channel> = scenario
-            .channels
-            .iter()
-            .map(|c| Channel::new(c, &layout.routes))
-            .collect();
+        let (channels, tdma) =
+            network_of(scenario, &layout).expect("ok: validation built this network once already");
         let mut link_home = vec![(0, 0); scenario.links.len()];
         let mut body_home = vec![(0, 0); scenario.bodies.len()];
         for node in &nodes {
@@ -177,9 +199,8 @@ impl CoSim {
             k.schedule(t, class, e)
                 .expect("ok: initial events are at or after time zero");
         };
-        let mut channels = channels;
-        let tdma = match &scenario.network {
-            NetworkSpec::Ideal => {
+        match &tdma {
+            None => {
                 for (c, ch) in channels.iter().enumerate() {
                     if !ch.routes.is_empty() {
                         schedule(
@@ -190,23 +211,15 @@ impl CoSim {
                         );
                     }
                 }
-                None
             }
-            NetworkSpec::Tdma(_) => {
-                let link = TdmaLink::new(scenario, &channels)
-                    .expect("ok: validation built this network once already");
-                for (ch, tau) in channels.iter_mut().zip(link.nominal_periods()) {
-                    ch.tau = tau;
-                }
-                schedule(
-                    &mut kernel,
-                    SimTime::ZERO,
-                    EventClass::ClockSync,
-                    Event::Cycle,
-                );
-                Some(Box::new(link))
-            }
-        };
+            Some(_) => schedule(
+                &mut kernel,
+                SimTime::ZERO,
+                EventClass::ClockSync,
+                Event::Cycle,
+            ),
+        }
+        let tdma = tdma.map(Box::new);
         let first_window = scenario.measurement_period.min(scenario.duration);
         schedule(
             &mut kernel,

@@ -8,9 +8,8 @@ use serde::Serialize;
 use serde_json::Value;
 
 use super::budget::Estimate;
-use crate::cosim::tdma::TdmaLink;
+use crate::cosim::world::network_of;
 use crate::error::{Error, Result};
-use crate::network::Channel;
 use crate::partition::layout::Layout;
 use crate::scenario::model::{DataKind, NetworkSpec, Scenario};
 
@@ -150,53 +149,41 @@ pub fn plan(scenario: &Scenario) -> Result<RunPlan> {
                 .collect(),
         })
         .collect();
-    let channels: Vec<Channel> = s
-        .channels
+    let (channels, link) =
+        network_of(s, &layout).map_err(|e| Error::invalid("network", e.to_string()))?;
+    // A channel one of whose senders the slot list never serves has no period.
+    let achieved: Vec<_> = channels
         .iter()
-        .map(|c| Channel::new(c, &layout.routes))
+        .map(|c| (c.tau.0 != u64::MAX).then_some(c.tau))
         .collect();
-    let (achieved, tdma) = match &s.network {
-        NetworkSpec::Ideal => (
-            channels.iter().map(|c| Some(c.tau)).collect::<Vec<_>>(),
-            None,
-        ),
-        NetworkSpec::Tdma(_) => {
-            let link = TdmaLink::new(s, &channels)
-                .map_err(|e| Error::invalid("network", e.to_string()))?;
-            let periods = link
-                .nominal_periods()
-                .into_iter()
-                .map(|p| (p.0 != u64::MAX).then_some(p))
-                .collect();
-            let net = link.network();
-            let cycle = net.layout();
-            let list = net.lists().active();
-            let slots = (0..list.len())
-                .map(|j| {
-                    let slot = cycle.dynamic_slot(j);
-                    let entry = list.get(j);
-                    SlotPlan {
-                        slot,
-                        start: cycle.offset(slot).as_secs_f64(),
-                        sender: entry.map(|e| e.sender),
-                        channel: entry.map(|e| {
-                            s.channels
-                                .get(e.channel)
-                                .map_or_else(|| e.channel.to_string(), |c| c.name.clone())
-                        }),
-                    }
-                })
-                .collect();
-            let plan = TdmaPlan {
-                cycle: cycle.cycle_len().as_secs_f64(),
-                slot: cycle.slot_len().as_secs_f64(),
-                slots: cycle.slots(),
-                first_dynamic: cycle.first_dynamic(),
-                list: slots,
-            };
-            (periods, Some(plan))
+    let tdma = link.map(|link| {
+        let net = link.network();
+        let cycle = net.layout();
+        let list = net.lists().active();
+        let slots = (0..list.len())
+            .map(|j| {
+                let slot = cycle.dynamic_slot(j);
+                let entry = list.get(j);
+                SlotPlan {
+                    slot,
+                    start: cycle.offset(slot).as_secs_f64(),
+                    sender: entry.map(|e| e.sender),
+                    channel: entry.map(|e| {
+                        s.channels
+                            .get(e.channel)
+                            .map_or_else(|| e.channel.to_string(), |c| c.name.clone())
+                    }),
+                }
+            })
+            .collect();
+        TdmaPlan {
+            cycle: cycle.cycle_len().as_secs_f64(),
+            slot: cycle.slot_len().as_secs_f64(),
+            slots: cycle.slots(),
+            first_dynamic: cycle.first_dynamic(),
+            list: slots,
         }
-    };
+    });
     let duration = s.duration.0;
     let per_period = |tau: crate::kernel::SimTime| duration.checked_div(tau.0).unwrap_or(0);
     let mut messages = 0u64;
