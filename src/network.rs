@@ -6,4 +6,4 @@ pub mod message;
 pub mod tdma;
 
 pub use channel::Channel;
-pub use message::{Message, Payload};
+pub use message::{LineSample, Message, Payload};

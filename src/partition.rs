@@ -13,6 +13,7 @@
 
 pub mod coupling;
 pub mod layout;
+pub mod line;
 pub mod node;
 
 pub use layout::Layout;

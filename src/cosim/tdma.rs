@@ -19,6 +19,7 @@ use crate::network::tdma::{
     schedule, ChannelRequest, CycleReport, Schedule, SlotList, TdmaError, TdmaNetwork,
 };
 use crate::network::{Channel, Message};
+use crate::partition::line::LineSet;
 use crate::scenario::file::TdmaSample;
 use crate::scenario::model::{NetworkSpec, Scenario};
 
@@ -53,7 +54,19 @@ impl TdmaLink {
             .partition
             .as_ref()
             .map_or(crate::scenario::model::Coupling::Reset, |p| p.coupling);
-        let frames = FrameSizes::from_channels(channels, rigid, coupling, cfg.header_bytes);
+        let routes: Vec<_> = channels
+            .iter()
+            .flat_map(|c| c.routes.iter().copied())
+            .collect();
+        let lines = LineSet::new(s, &routes);
+        let node_of = s
+            .partition
+            .as_ref()
+            .map(|p| p.node_of.clone())
+            .unwrap_or_default();
+        let frames = FrameSizes::from_channels(channels, rigid, coupling, cfg.header_bytes, &|r| {
+            lines.on_route(s, &node_of, r)
+        });
         let senders = senders(channels);
         let layout = crate::network::tdma::CycleLayout::new(&cfg)?;
         let initial = match &spec.slot_list {

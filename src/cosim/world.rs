@@ -11,7 +11,8 @@ use crate::kernel::{EventClass, Kernel, SimTime};
 use crate::multibody::dynamics::EvalError;
 use crate::multibody::System;
 use crate::network::tdma::{tdma_node, CycleReport, TdmaError};
-use crate::network::{Channel, Message};
+use crate::network::{Channel, Message, Payload};
+use crate::partition::line::LineSet;
 use crate::partition::{Layout, Node};
 use crate::scenario::model::{DataKind, NetworkSpec, Scenario};
 
@@ -156,8 +157,10 @@ pub struct CoSim {
     tdma: Option<Box<TdmaLink>>,
     meter: CostMeter,
     epochs: Vec<EpochRecord>,
-    /// (node, local index) holding each link's values.
+    /// (node, local index) holding each link's values (not for lines).
     link_home: Vec<(usize, usize)>,
+    /// Per link that is a transmission line: the nodes of its ends `a` and `b`.
+    line_ends: Vec<Option<(usize, usize)>>,
     /// (node, local index) of each body's owner copy.
     body_home: Vec<(usize, usize)>,
     w: Vec<f64>,
@@ -179,12 +182,23 @@ impl CoSim {
     /// Builds the world of a validated scenario, with its first events scheduled.
     pub fn new(scenario: &Scenario) -> CoSim {
         let layout = Layout::new(scenario);
+        let lines = LineSet::new(scenario, &layout.routes);
         let nodes: Vec<Node> = (0..layout.nodes)
-            .map(|n| Node::new(scenario, &layout, n))
+            .map(|n| Node::new(scenario, &layout, n, &lines))
             .collect();
         let (channels, tdma) =
             network_of(scenario, &layout).expect("ok: validation built this network once already");
-        let mut link_home = vec![(0, 0); scenario.links.len()];
+        let line_ends = (0..scenario.links.len())
+            .map(|l| {
+                let link = &scenario.links[l];
+                lines
+                    .is_line(l)
+                    .then(|| (layout.node_of[link.a], layout.node_of[link.b]))
+            })
+            .collect();
+        // A line's values are gathered from both its ends; its owner is named for it.
+        let mut link_home: Vec<(usize, usize)> =
+            layout.link_owner.iter().map(|&n| (n, usize::MAX)).collect();
         let mut body_home = vec![(0, 0); scenario.bodies.len()];
         for node in &nodes {
             for (local, &g) in node.links.iter().enumerate() {
@@ -238,6 +252,7 @@ impl CoSim {
             tdma,
             epochs: Vec::new(),
             link_home,
+            line_ends,
             body_home,
             w: vec![0.0; nl],
             f: vec![0.0; nl],
@@ -570,11 +585,21 @@ impl CoSim {
     }
 
     /// The message of route `r` of channel `c`, sampled at `t`.
-    fn message(&self, t: SimTime, c: usize, r: usize) -> Option<Message> {
+    /// A line's end starts its next wave window with its sample.
+    fn message(&mut self, t: SimTime, c: usize, r: usize) -> Option<Message> {
         let route = self.channels[c].routes[r];
-        let from = &self.nodes[route.from];
+        let from = &mut self.nodes[route.from];
         let payload = match (route.kind, route.link) {
-            (DataKind::State, _) => from.state_payload(t, route.body, route.to),
+            (DataKind::State, _) => {
+                let mut payload = from.state_payload(t, route.body, route.to);
+                if let Payload::State { lines, .. } = &mut payload {
+                    *lines = from.line_samples_to(t, route.body, route.to);
+                }
+                payload
+            }
+            (DataKind::Force, Some(l)) if from.has_line(l) => {
+                Payload::Line(from.line_sample(t, l)?)
+            }
             (DataKind::Force, Some(l)) => from.force_payload(l, route.body),
             (DataKind::Force, None) => return None,
         };
@@ -702,6 +727,14 @@ impl CoSim {
     /// Copies each link's and body's values from the node that owns it.
     fn gather(&mut self) {
         for (l, &(n, ll)) in self.link_home.iter().enumerate() {
+            if let Some((na, nb)) = self.line_ends[l] {
+                // A line: its true length from both ends' anchors, the owner's tension.
+                let (pa, ta) = self.nodes[na].line_end(l).unwrap_or_default();
+                let (pb, tb) = self.nodes[nb].line_end(l).unwrap_or_default();
+                self.w[l] = (pa - pb).norm() - self.scenario.links[l].length;
+                self.f[l] = if n == na { ta } else { tb };
+                continue;
+            }
             let node = &self.nodes[n];
             self.w[l] = node.system.violations()[ll];
             self.f[l] = node.system.tension(&node.state, ll);

@@ -33,7 +33,13 @@ pub enum Payload {
         /// `passive`: the energy the body has put into its port with the receiver so far
         /// [J] (zero under the other schemes, which do not send it).
         energy: f64,
+        /// The waves of the transmission lines from this body to the receiver's bodies
+        /// (empty without lines).
+        lines: Vec<LineSample>,
     },
+    /// A transmission line's wave from the link owner's end (sent on the link's force
+    /// route instead of a force).
+    Line(LineSample),
     /// A border link's load on a ghosted body, for the body's owner.
     Force {
         /// Global link index.
@@ -60,15 +66,35 @@ impl Payload {
     pub fn kind(&self) -> DataKind {
         match self {
             Payload::State { .. } => DataKind::State,
-            Payload::Force { .. } => DataKind::Force,
+            Payload::Force { .. } | Payload::Line(_) => DataKind::Force,
         }
     }
 
     /// Number of `f64` values on the wire (rotation only where the scene has it, the
     /// force rates only where the coupling sends them).
     pub fn floats(&self, rigid: bool, coupling: Coupling) -> usize {
-        crate::network::tdma::frame::floats_per_route(self.kind(), rigid, coupling)
+        let lines = match self {
+            Payload::State { lines, .. } => lines.len(),
+            Payload::Force { .. } => 0,
+            Payload::Line(_) => 1,
+        };
+        crate::network::tdma::frame::floats_per_route(self.kind(), rigid, coupling, lines)
     }
+}
+
+/// One end's sample of a transmission line (see `partition::line`).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct LineSample {
+    /// Global link index.
+    pub link: usize,
+    /// Mean outgoing wave over the window [N].
+    pub wave: f64,
+    /// Window length (the receiver holds the wave this long).
+    pub span: SimTime,
+    /// The sending end's anchor position [m].
+    pub p: Vector3<f64>,
+    /// The sending end's anchor velocity [m/s].
+    pub v: Vector3<f64>,
 }
 
 /// A message in flight.

@@ -5,14 +5,16 @@ use std::collections::BTreeMap;
 
 use nalgebra::{Quaternion, Vector3};
 
+mod lines;
 mod passivity;
 
 use super::coupling::{Correction, Extrapolated, GhostHistory, GhostSample, PortAccount};
+use super::line::{LineEnd, LineSet};
 use super::Layout;
 use crate::kernel::SimTime;
 use crate::multibody::{State, System};
 use crate::network::Payload;
-use crate::scenario::model::{Coupling, GhostMode, Scenario};
+use crate::scenario::model::{BodyModel, Coupling, GhostMode, Scenario};
 
 /// A border force received from another node: held until the next arrival (`reset`),
 /// or extrapolated with its rate (`predict`).
@@ -79,11 +81,14 @@ pub struct Node {
     held_forces: Vec<HeldForce>,
     held_states: Vec<HeldState>,
     coupling: CouplingState,
+    /// This node's ends of transmission lines (`partition::line`), in link order.
+    lines: Vec<LineEnd>,
 }
 
 impl Node {
-    /// Builds node `index` of `layout` for `scenario`.
-    pub fn new(scenario: &Scenario, layout: &Layout, index: usize) -> Node {
+    /// Builds node `index` of `layout` for `scenario`, with `lines` as transmission
+    /// lines (out of the node's constraint system).
+    pub fn new(scenario: &Scenario, layout: &Layout, index: usize, lines: &LineSet) -> Node {
         let owned = layout.owned[index].len();
         let bodies: Vec<usize> = layout.owned[index]
             .iter()
@@ -92,7 +97,11 @@ impl Node {
             .collect();
         let local_body: BTreeMap<usize, usize> =
             bodies.iter().enumerate().map(|(l, &g)| (g, l)).collect();
-        let links = layout.links[index].clone();
+        let links: Vec<usize> = layout.links[index]
+            .iter()
+            .copied()
+            .filter(|&l| !lines.is_line(l))
+            .collect();
         let mut sub = scenario.clone();
         sub.bodies = bodies.iter().map(|&g| scenario.bodies[g].clone()).collect();
         sub.links = links
@@ -144,7 +153,7 @@ impl Node {
         let held_forces = layout
             .routes
             .iter()
-            .filter(|r| r.to == index && r.link.is_some())
+            .filter(|r| r.to == index && r.link.is_some_and(|l| !lines.is_line(l)))
             .filter_map(|r| {
                 Some(HeldForce {
                     link: r.link?,
@@ -203,6 +212,7 @@ impl Node {
         if scheme.predicts() {
             coupling.held_now = vec![(Vector3::zeros(), Vector3::zeros()); held_forces.len()];
         }
+        let line_ends = line_ends(scenario, layout, index, lines, &local_body, owned);
         Node {
             index,
             system,
@@ -216,6 +226,7 @@ impl Node {
             held_forces,
             held_states,
             coupling,
+            lines: line_ends,
         }
     }
 
@@ -268,6 +279,10 @@ impl Node {
                 torque_rate += h.value.torque_rate;
             }
         }
+        for end in self.lines.iter().filter(|e| e.body == i) {
+            force += end.load.0;
+            torque += end.load.1;
+        }
         let own = self.body_sample(i);
         Payload::State {
             body: g,
@@ -285,6 +300,7 @@ impl Node {
                 .iter()
                 .find(|p| p.0 == i && p.1 == receiver)
                 .map_or(0.0, |p| p.2.taken),
+            lines: Vec::new(),
         }
     }
 
@@ -339,7 +355,11 @@ impl Node {
                 force_rate,
                 torque_rate,
                 energy,
+                lines,
             } => {
+                for sample in lines {
+                    self.receive_line(sent, state_time, sample);
+                }
                 let Some(g) = self.local(*body) else { return };
                 let k = g - self.owned;
                 let rigid = self.state.is_rigid();
@@ -347,7 +367,7 @@ impl Node {
                     port.report(*energy);
                 }
                 match self.coupling.scheme {
-                    Coupling::Predict { .. } | Coupling::Passive { .. } => {
+                    Coupling::Predict { .. } | Coupling::Passive { .. } | Coupling::Tlm { .. } => {
                         self.coupling.ghost_loads[k] = Extrapolated {
                             force: *force,
                             torque: *torque,
@@ -397,6 +417,7 @@ impl Node {
                 held.q = self.state.q.get(g).copied();
                 held.omega = self.state.omega.get(g).copied();
             }
+            Payload::Line(sample) => self.receive_line(sent, state_time, sample),
             Payload::Force {
                 link,
                 force,
@@ -511,6 +532,7 @@ impl Node {
         if let Some(tank) = self.coupling.scheme.tank() {
             self.passivity(tank);
         }
+        self.step_lines(t);
     }
 
     /// After a step in `hold` mode, puts every ghost back at its held state.
@@ -528,4 +550,62 @@ impl Node {
             }
         }
     }
+}
+
+/// Node `index`'s ends of the lines in `lines`: one per line whose body it owns.
+fn line_ends(
+    scenario: &Scenario,
+    layout: &Layout,
+    index: usize,
+    lines: &LineSet,
+    local_body: &BTreeMap<usize, usize>,
+    owned: usize,
+) -> Vec<LineEnd> {
+    let Some(rule) = scenario.partition.as_ref().and_then(|p| p.coupling.lines()) else {
+        return Vec::new();
+    };
+    let rigid = scenario.body_model == BodyModel::Rigid;
+    let anchor_at = |b: usize, r: &Vector3<f64>| {
+        let body = &scenario.bodies[b];
+        if rigid {
+            let rr = body.orientation * r;
+            (
+                body.position + rr,
+                body.velocity + body.angular_velocity.cross(&rr),
+            )
+        } else {
+            (body.position, body.velocity)
+        }
+    };
+    let mut ends = Vec::new();
+    for (l, link) in scenario.links.iter().enumerate() {
+        let Some(z) = lines.impedance(l) else {
+            continue;
+        };
+        let (pa, _) = anchor_at(link.a, &link.anchor_a);
+        let (pb, _) = anchor_at(link.b, &link.anchor_b);
+        let initial_wave = rule.stiffness * ((pa - pb).norm() - link.length);
+        for (own, anchor, far, far_anchor) in [
+            (link.a, link.anchor_a, link.b, link.anchor_b),
+            (link.b, link.anchor_b, link.a, link.anchor_a),
+        ] {
+            let Some(&local) = local_body.get(&own).filter(|&&b| b < owned) else {
+                continue;
+            };
+            let (p, v) = anchor_at(far, &far_anchor);
+            let far_node = layout.node_of[far];
+            let mut end = LineEnd::new(
+                l,
+                local,
+                anchor,
+                (far, far_node, p, v),
+                layout.link_owner[l] == index,
+                z,
+                initial_wave,
+            );
+            end.delay = z / rule.stiffness;
+            ends.push(end);
+        }
+    }
+    ends
 }

@@ -595,8 +595,11 @@ pub enum CouplingName {
     /// `"predict"`: delay-compensated ghosts and extrapolated border forces.
     Predict,
     /// `"passive"` (the default of `partition.coupling`): `predict` gated by an energy
-    /// tank per border port.
+    /// tank per border port, and transmission lines on the border links whose samples
+    /// grow older than `lines_above`.
     Passive,
+    /// `"tlm"`: every border link is a transmission line.
+    Tlm,
 }
 
 /// `partition.coupling` as an object.
@@ -613,6 +616,15 @@ pub struct CouplingSpecFile {
     /// default 0.01 s.
     #[serde(default)]
     pub extrapolate: Option<f64>,
+    /// `passive` and `tlm`: the transmission lines' stiffness `Z / T` [N/m], > 0
+    /// (`Z` = stiffness × the line's one-way delay `T`); default 400 N/m.
+    #[serde(default)]
+    pub stiffness: Option<f64>,
+    /// `passive`: a border link becomes a transmission line when the oldest sample it
+    /// can use (`τ + latency` of the channels carrying its data, as in the file) is
+    /// older than this [s], in [0, 1000]; default 0.06 s.
+    #[serde(default)]
+    pub lines_above: Option<f64>,
 }
 
 /// One entry of `partition.link_owners`.

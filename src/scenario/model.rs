@@ -263,7 +263,35 @@ pub enum Coupling {
         tank: f64,
         /// Longest time a force is carried forward by its rate [ns].
         extrapolate: SimTime,
+        /// Border links whose samples can grow older than this become transmission
+        /// lines (see [`Lines`]); the others keep the predictor and the tank.
+        lines: Lines,
     },
+    /// Every border link is a transmission line (see [`Lines`]); the rest of the
+    /// coupling (ghosts, owner-side loads) is `predict`'s.
+    Tlm {
+        /// Longest time a force is carried forward by its rate [ns].
+        extrapolate: SimTime,
+        /// The lines' stiffness.
+        lines: Lines,
+    },
+}
+
+/// Which border links a scheme turns into transmission-line (TLM) links, and how stiff.
+///
+/// A line replaces the border link's constraint by two local dampers of impedance `Z`
+/// joined by waves that travel with the border's messages: it cannot create energy
+/// whatever the delay, and it is a spring of stiffness `Z / T` for a one-way delay `T`.
+/// `Z = stiffness · T`, with `T` estimated once from the channels' τ and latency in the
+/// scenario (see `partition::line`).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Lines {
+    /// A border link becomes a line when the oldest sample it can use (the largest
+    /// `τ + latency` of the channels carrying its data) is older than this [ns];
+    /// `SimTime::ZERO` makes every border link a line.
+    pub above: SimTime,
+    /// The lines' stiffness `Z / T` [N/m].
+    pub stiffness: f64,
 }
 
 impl Coupling {
@@ -273,6 +301,7 @@ impl Coupling {
             Coupling::Reset => "reset",
             Coupling::Predict { .. } => "predict",
             Coupling::Passive { .. } => "passive",
+            Coupling::Tlm { .. } => "tlm",
         }
     }
 
@@ -286,9 +315,9 @@ impl Coupling {
     pub fn extrapolate(self) -> SimTime {
         match self {
             Coupling::Reset => SimTime::ZERO,
-            Coupling::Predict { extrapolate } | Coupling::Passive { extrapolate, .. } => {
-                extrapolate
-            }
+            Coupling::Predict { extrapolate }
+            | Coupling::Passive { extrapolate, .. }
+            | Coupling::Tlm { extrapolate, .. } => extrapolate,
         }
     }
 
@@ -296,6 +325,14 @@ impl Coupling {
     pub fn tank(self) -> Option<f64> {
         match self {
             Coupling::Passive { tank, .. } => Some(tank),
+            _ => None,
+        }
+    }
+
+    /// Which border links become transmission lines (`passive` and `tlm`).
+    pub fn lines(self) -> Option<Lines> {
+        match self {
+            Coupling::Passive { lines, .. } | Coupling::Tlm { lines, .. } => Some(lines),
             _ => None,
         }
     }

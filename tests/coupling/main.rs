@@ -362,3 +362,23 @@ fn a_frame_too_long_under_a_predicting_coupling_says_how_to_fit_it() {
         "reset's frames fit"
     );
 }
+
+#[test]
+fn transmission_lines_never_give_the_bodies_more_than_they_took() {
+    // Over 60 s undriven (a velocity field, lines at rest), for every τ: the lines' net
+    // work on the bodies is never positive.
+    let (_, m, _) = run(&undriven(false, None, 0.0), &[]);
+    let ke0 = m.kinetic[0];
+    let mono_gain = m.kinetic.iter().fold(0.0, |a: f64, &k| a.max(k)) - ke0;
+    for tau in [0.001, 0.005, 0.020, 0.050] {
+        let (world, w, error) = run(&undriven(false, Some(r#"{"scheme": "tlm"}"#), tau), &[]);
+        let work: f64 = world.nodes().iter().map(|n| n.line_work()).sum();
+        let gain = w.kinetic.iter().fold(0.0, |a: f64, &k| a.max(k)) - ke0;
+        eprintln!(
+            "tlm, τ = {tau}: line work {work:.4} J, kinetic gain {gain:.3} J (monolithic {mono_gain:.3} J), end KE {:.3}{}",
+            w.kinetic.last().unwrap(),
+            error.as_deref().map_or(String::new(), |e| format!("; {e}"))
+        );
+        assert!(work <= 1e-9, "τ = {tau}: the lines gave {work} J");
+    }
+}

@@ -425,10 +425,16 @@ fn delays_at_their_bounds() {
         );
         previous = r.max_w;
     }
-    // τ = 0.5 s: under the thesis load the borders tear — the divergence error at a
-    // whole number of steps, no NaN in the files.
-    let e = run_to_files("tau_0.5", &partitioned(0.5, 20.0)).unwrap_err();
-    eprintln!("τ = 0.5 s, 20 N: {e}");
+    // τ = 0.5 s: the default coupling makes the border links transmission lines, which
+    // hold the thesis load; under `predict` the borders tear — the divergence error at
+    // a whole number of steps, no NaN in the files.
+    let r = quiet(&partitioned(0.5, 20.0));
+    eprintln!("τ = 0.5 s, 20 N, default: max |w| = {:.3e} m", r.max_w);
+    assert!(r.result.is_ok() && r.max_w < 1.0);
+    let mut predict = partitioned(0.5, 20.0);
+    predict["partition"]["coupling"] = json!("predict");
+    let e = run_to_files("tau_0.5", &predict).unwrap_err();
+    eprintln!("τ = 0.5 s, 20 N, predict: {e}");
     assert!(matches!(e, Error::Diverged(_)));
     // Under a 0.1 N load the same delay is harmless, and without load nothing moves.
     let r = quiet(&partitioned(0.5, 0.1));

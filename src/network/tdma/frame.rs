@@ -8,6 +8,7 @@ pub use super::config::transmission_time;
 use super::config::TdmaConfig;
 use super::tdma_node;
 use crate::network::Channel;
+use crate::partition::layout::Route;
 use crate::scenario::model::{Coupling, DataKind};
 
 /// Bytes per `f64` on the wire.
@@ -61,7 +62,12 @@ pub fn broadcast_fragments(entries: usize, per: Option<usize>) -> usize {
 /// orientation, angular velocity and torque); a force is 3 values (6 with the torque);
 /// a coupling that sends rates adds one rate per force and torque value, and the
 /// `passive` one its energy report (one value).
-pub fn floats_per_route(kind: DataKind, rigid: bool, coupling: Coupling) -> usize {
+pub fn floats_per_route(kind: DataKind, rigid: bool, coupling: Coupling, lines: usize) -> usize {
+    // A transmission line's sample: wave, window length, anchor position and velocity.
+    const LINE: usize = 8;
+    if kind == DataKind::Force && lines > 0 {
+        return LINE;
+    }
     let loads = if rigid { 6 } else { 3 };
     let base = match (kind, rigid) {
         (DataKind::State, false) => 9,
@@ -71,7 +77,7 @@ pub fn floats_per_route(kind: DataKind, rigid: bool, coupling: Coupling) -> usiz
     };
     let rates = if coupling.predicts() { loads } else { 0 };
     let energy = usize::from(coupling.tank().is_some());
-    base + rates + energy
+    base + rates + energy + lines * LINE
 }
 
 /// The sending TDMA nodes of each channel (sorted, without repeats), from its routes.
@@ -137,12 +143,13 @@ impl FrameSizes {
         rigid: bool,
         coupling: Coupling,
         header_bytes: u64,
+        lines: &dyn Fn(&Route) -> usize,
     ) -> FrameSizes {
         let mut floats: BTreeMap<(usize, usize), usize> = BTreeMap::new();
         for (c, ch) in channels.iter().enumerate() {
             for r in &ch.routes {
                 *floats.entry((tdma_node(r.from), c)).or_default() +=
-                    floats_per_route(r.kind, rigid, coupling);
+                    floats_per_route(r.kind, rigid, coupling, lines(r));
             }
         }
         let mut sizes = FrameSizes::new(header_bytes);
@@ -216,18 +223,22 @@ mod tests {
             Coupling::Passive {
                 tank: 1.0,
                 extrapolate: x,
+                lines: crate::scenario::model::Lines {
+                    above: SimTime(u64::MAX),
+                    stiffness: 1.0,
+                },
             },
         );
-        assert_eq!(floats_per_route(DataKind::State, false, r), 9);
-        assert_eq!(floats_per_route(DataKind::State, true, r), 19);
-        assert_eq!(floats_per_route(DataKind::Force, false, r), 3);
-        assert_eq!(floats_per_route(DataKind::Force, true, r), 6);
-        assert_eq!(floats_per_route(DataKind::State, false, p), 12);
-        assert_eq!(floats_per_route(DataKind::State, true, p), 25);
-        assert_eq!(floats_per_route(DataKind::Force, false, p), 6);
-        assert_eq!(floats_per_route(DataKind::Force, true, p), 12);
-        assert_eq!(floats_per_route(DataKind::State, false, e), 13);
-        assert_eq!(floats_per_route(DataKind::Force, true, e), 13);
+        assert_eq!(floats_per_route(DataKind::State, false, r, 0), 9);
+        assert_eq!(floats_per_route(DataKind::State, true, r, 0), 19);
+        assert_eq!(floats_per_route(DataKind::Force, false, r, 0), 3);
+        assert_eq!(floats_per_route(DataKind::Force, true, r, 0), 6);
+        assert_eq!(floats_per_route(DataKind::State, false, p, 0), 12);
+        assert_eq!(floats_per_route(DataKind::State, true, p, 0), 25);
+        assert_eq!(floats_per_route(DataKind::Force, false, p, 0), 6);
+        assert_eq!(floats_per_route(DataKind::Force, true, p, 0), 12);
+        assert_eq!(floats_per_route(DataKind::State, false, e, 0), 13);
+        assert_eq!(floats_per_route(DataKind::Force, true, e, 0), 13);
     }
 
     #[test]

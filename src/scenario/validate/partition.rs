@@ -11,9 +11,10 @@ use crate::kernel::SimTime;
 use super::bodies::Ids;
 use crate::error::{Error, Result};
 use crate::scenario::file::{
-    CouplingFile, CouplingName, GhostsFile, GridFile, LinkOwnerFile, PartitionFile,
+    CouplingFile, CouplingName, CouplingSpecFile, GhostsFile, GridFile, LinkOwnerFile,
+    PartitionFile,
 };
-use crate::scenario::model::{BodySpec, Coupling, GhostMode, LinkSpec, PartitionSpec};
+use crate::scenario::model::{BodySpec, Coupling, GhostMode, Lines, LinkSpec, PartitionSpec};
 
 /// Validates `partition` against the model (`grid` is the model's grid section, if it
 /// is one; `bodies` and `links` are the validated model in file order).
@@ -76,25 +77,59 @@ pub const DEFAULT_TANK: f64 = 10.0;
 /// See [`DEFAULT_TANK`].
 pub const DEFAULT_EXTRAPOLATE: f64 = 0.01;
 
+/// The default stiffness of the transmission lines [N/m] and the age above which the
+/// `passive` scheme turns a border link into a line [s] (docs/guide.md "Coupling across
+/// partitions" gives the measurements behind both).
+pub const DEFAULT_STIFFNESS: f64 = 400.0;
+/// See [`DEFAULT_STIFFNESS`].
+pub const DEFAULT_LINES_ABOVE: f64 = 0.06;
+
 /// `partition.coupling`.
 fn coupling(c: &CouplingFile) -> Result<Coupling> {
-    let (name, tank, extrapolate) = match *c {
-        CouplingFile::Name(name) => (name, None, None),
-        CouplingFile::Spec(spec) => (spec.scheme, spec.tank, spec.extrapolate),
+    let spec = match *c {
+        CouplingFile::Name(scheme) => CouplingSpecFile {
+            scheme,
+            tank: None,
+            extrapolate: None,
+            stiffness: None,
+            lines_above: None,
+        },
+        CouplingFile::Spec(spec) => spec,
     };
-    if name == CouplingName::Reset && extrapolate.is_some() {
-        return Err(Error::invalid(
-            "partition.coupling.extrapolate",
-            "the \"reset\" scheme holds forces and does not extrapolate",
-        ));
-    }
-    if name != CouplingName::Passive && tank.is_some() {
-        return Err(Error::invalid(
-            "partition.coupling.tank",
-            "only the \"passive\" scheme has a tank",
-        ));
-    }
-    let secs = extrapolate.unwrap_or(DEFAULT_EXTRAPOLATE);
+    let name = spec.scheme;
+    let not_for = |field: &str, value: Option<f64>, schemes: &[CouplingName], why: &str| {
+        if value.is_some() && !schemes.contains(&name) {
+            Err(Error::invalid(format!("partition.coupling.{field}"), why))
+        } else {
+            Ok(())
+        }
+    };
+    use CouplingName::{Passive, Predict, Tlm};
+    not_for(
+        "extrapolate",
+        spec.extrapolate,
+        &[Predict, Passive, Tlm],
+        "the \"reset\" scheme holds forces and does not extrapolate",
+    )?;
+    not_for(
+        "tank",
+        spec.tank,
+        &[Passive],
+        "only the \"passive\" scheme has a tank",
+    )?;
+    not_for(
+        "stiffness",
+        spec.stiffness,
+        &[Passive, Tlm],
+        "only the \"passive\" and \"tlm\" schemes have transmission lines",
+    )?;
+    not_for(
+        "lines_above",
+        spec.lines_above,
+        &[Passive],
+        "only the \"passive\" scheme chooses its lines by age (\"tlm\" makes every border link a line)",
+    )?;
+    let secs = spec.extrapolate.unwrap_or(DEFAULT_EXTRAPOLATE);
     let extrapolate = match SimTime::from_secs_f64(secs) {
         Some(t) if (0.0..=10.0).contains(&secs) => t,
         _ => {
@@ -104,19 +139,47 @@ fn coupling(c: &CouplingFile) -> Result<Coupling> {
             ))
         }
     };
+    let stiffness = spec.stiffness.unwrap_or(DEFAULT_STIFFNESS);
+    if !(stiffness.is_finite() && stiffness > 0.0) {
+        return Err(Error::invalid(
+            "partition.coupling.stiffness",
+            format!("must be a finite stiffness > 0 N/m, got {stiffness}"),
+        ));
+    }
+    let above_secs = spec.lines_above.unwrap_or(DEFAULT_LINES_ABOVE);
+    let above = match SimTime::from_secs_f64(above_secs) {
+        Some(t) if (0.0..=1000.0).contains(&above_secs) => t,
+        _ => {
+            return Err(Error::invalid(
+                "partition.coupling.lines_above",
+                format!("must be a time between 0 and 1000 s, got {above_secs}"),
+            ))
+        }
+    };
     match name {
         CouplingName::Reset => Ok(Coupling::Reset),
-        CouplingName::Predict => Ok(Coupling::Predict { extrapolate }),
-        CouplingName::Passive => {
-            let tank = tank.unwrap_or(DEFAULT_TANK);
+        Predict => Ok(Coupling::Predict { extrapolate }),
+        Passive => {
+            let tank = spec.tank.unwrap_or(DEFAULT_TANK);
             if !(tank.is_finite() && tank >= 0.0) {
                 return Err(Error::invalid(
                     "partition.coupling.tank",
                     format!("must be a finite energy ≥ 0 J, got {tank}"),
                 ));
             }
-            Ok(Coupling::Passive { tank, extrapolate })
+            Ok(Coupling::Passive {
+                tank,
+                extrapolate,
+                lines: Lines { above, stiffness },
+            })
         }
+        Tlm => Ok(Coupling::Tlm {
+            extrapolate,
+            lines: Lines {
+                above: SimTime::ZERO,
+                stiffness,
+            },
+        }),
     }
 }
 

@@ -1,0 +1,95 @@
+//! A node's ends of transmission lines: their tension every step, their samples and
+//! what arrives from their far ends (the line itself is [`crate::partition::line`]).
+
+use nalgebra::{UnitQuaternion, Vector3};
+
+use super::Node;
+use crate::kernel::SimTime;
+use crate::network::LineSample;
+
+impl Node {
+    /// World position and velocity of the anchor `r` (body frame) of local body `b`,
+    /// and its world offset from the body's centre (zero on point masses).
+    fn anchor(&self, b: usize, r: &Vector3<f64>) -> [Vector3<f64>; 3] {
+        if self.state.is_rigid() {
+            let rr = UnitQuaternion::new_normalize(self.state.q[b]) * r;
+            [
+                self.state.p[b] + rr,
+                self.state.v[b] + self.state.omega[b].cross(&rr),
+                rr,
+            ]
+        } else {
+            [self.state.p[b], self.state.v[b], Vector3::zeros()]
+        }
+    }
+
+    /// Before the step at `t`: every line end's tension, applied to its body.
+    pub(super) fn step_lines(&mut self, t: SimTime) {
+        if self.lines.is_empty() {
+            return;
+        }
+        let h = self.system.dt().as_secs_f64();
+        let rigid = self.state.is_rigid();
+        for k in 0..self.lines.len() {
+            let b = self.lines[k].body;
+            let [p, v, r] = self.anchor(b, &self.lines[k].anchor);
+            let f = self.lines[k].step(t, h, p, v);
+            let tq = r.cross(&f);
+            self.lines[k].load = (f, tq);
+            self.system.extra_force[b] += f;
+            if rigid {
+                self.system.extra_torque[b] += tq;
+            }
+        }
+    }
+
+    /// Whether global link `l` is a line with an end on this node.
+    pub fn has_line(&self, l: usize) -> bool {
+        self.lines.iter().any(|e| e.link == l)
+    }
+
+    /// The sample of this node's end of line `l` at `t` (the link owner's end, sent on
+    /// the link's force route); starts the end's next window.
+    pub fn line_sample(&mut self, t: SimTime, l: usize) -> Option<LineSample> {
+        let k = self.lines.iter().position(|e| e.link == l)?;
+        let [p, v, _] = self.anchor(self.lines[k].body, &self.lines[k].anchor);
+        Some(self.lines[k].sample(t, p, v))
+    }
+
+    /// The samples at `t` of the lines from owned global body `g` to node `receiver`'s
+    /// bodies (sent with `g`'s state), in link order; each starts its next window.
+    pub fn line_samples_to(&mut self, t: SimTime, g: usize, receiver: usize) -> Vec<LineSample> {
+        let Some(i) = self.local(g) else {
+            return Vec::new();
+        };
+        let mut out = Vec::new();
+        for k in 0..self.lines.len() {
+            let e = &self.lines[k];
+            if e.body != i || e.far_node != receiver || e.owner_side {
+                continue;
+            }
+            let [p, v, _] = self.anchor(i, &e.anchor);
+            out.push(self.lines[k].sample(t, p, v));
+        }
+        out
+    }
+
+    /// A far end's sample taken at `sent`, applied from `now`.
+    pub(super) fn receive_line(&mut self, sent: SimTime, now: SimTime, s: &LineSample) {
+        if let Some(e) = self.lines.iter_mut().find(|e| e.link == s.link) {
+            e.receive(sent, now, s);
+        }
+    }
+
+    /// This node's end of line `l`: its anchor's world position and its tension [N].
+    pub fn line_end(&self, l: usize) -> Option<(Vector3<f64>, f64)> {
+        let e = self.lines.iter().find(|e| e.link == l)?;
+        Some((self.anchor(e.body, &e.anchor)[0], e.tension))
+    }
+
+    /// Energy the lines gave this node's bodies so far, `Σ ∫ −T s dt` [J] (negative:
+    /// the lines took it).
+    pub fn line_work(&self) -> f64 {
+        self.lines.iter().map(|e| e.given).sum()
+    }
+}
