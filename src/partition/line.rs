@@ -38,18 +38,25 @@
 
 use nalgebra::Vector3;
 
-/// Time constant of the filter on the incoming wave, in line delays `T`.
+/// Time constant of the low-pass filter on a line's incoming wave [s]: `max(1.5 T, 4h)`
+/// for a line of one-way delay `T` stepped every `h`.
 ///
 /// A lossless line between masses rings at the multiples of `1 / 2T`, and a force held
 /// over a step gives a body `h²|F|²/2m` more kinetic energy than the work the line
 /// books (the energy error of any explicit step): nothing in a lossless line takes it
-/// out again, so the ringing grew without bound on two free bodies at τ = 1 and 5 ms.
-/// A first-order low-pass filter on the incoming wave (Krus's damped TLM element) takes
-/// it out: `y² ≤ α y₋² + (1 − α) x²` step by step, so the filtered wave never carries
-/// more energy than the wave that arrived. Measured on two free bodies and on the
-/// undriven 4×4 net (60 s, τ = 1–50 ms): a filter of `T` still let the net gain 16 J at
-/// τ = 1 ms; `2T` kept every run from gaining energy.
-pub const FILTER: f64 = 2.0;
+/// out again, so the ringing grew without bound on two free bodies at τ = 1 and 5 ms
+/// (kinetic energy 0.045 J → 68 J and 9 J in 20 s). A first-order low-pass filter on
+/// the incoming wave (the damped TLM element of Krus) takes it out, and is passive
+/// itself: `y² ≤ α y₋² + (1 − α) x²` step by step, so the filtered wave never carries
+/// more energy than the wave that arrived. Measured on the undriven 4×4 net (60 s,
+/// RK4, `tlm`, τ = 1–50 ms): `T` let the net gain 2.6 J at τ = 3 ms, `1.5 T` and `2T`
+/// (with the 4-step floor, which τ = 1 ms needs) gain nothing. A longer filter
+/// lengthens the line, whose parasitic mass grows with its delay: on the driven
+/// thesis scene at τ = 25 ms the 0–3 s error is 1.05 / 1.26 / 1.46 m for `T` / `1.5 T`
+/// / `2T`, so `1.5 T` is the shortest that holds.
+pub fn filter_time(delay: f64, h: f64) -> f64 {
+    (1.5 * delay).max(4.0 * h)
+}
 
 use crate::kernel::SimTime;
 use crate::network::LineSample;
@@ -172,6 +179,9 @@ pub struct LineEnd {
     hold_until: SimTime,
     /// Sample time of the last wave received (none yet: `None`).
     last_received: Option<SimTime>,
+    /// The initial wave `c₀` [N] and when the first wave replaced it.
+    initial_wave: f64,
+    first_wave: Option<SimTime>,
     /// `∫ b dt` of the outgoing wave since `window_from` [N·s].
     acc: f64,
     window_from: SimTime,
@@ -216,6 +226,8 @@ impl LineEnd {
             incoming: initial_wave,
             hold_until: SimTime(u64::MAX),
             last_received: None,
+            initial_wave,
+            first_wave: None,
             acc: 0.0,
             window_from: SimTime::ZERO,
             tension: initial_wave,
@@ -239,13 +251,9 @@ impl LineEnd {
         let len = d.norm();
         let n = if len > 0.0 { d / len } else { Vector3::zeros() };
         let s = -n.dot(&v);
-        let held = if t < self.hold_until {
-            self.incoming
-        } else {
-            0.0
-        };
-        // The low-pass filter of the incoming wave (time constant `FILTER · T`).
-        let tf = FILTER * self.delay;
+        let held = self.held(t);
+        // The low-pass filter of the incoming wave.
+        let tf = filter_time(self.delay, h);
         let alpha = tf / (tf + h);
         self.filtered = alpha * self.filtered + (1.0 - alpha) * held;
         let c = self.filtered;
@@ -254,6 +262,16 @@ impl LineEnd {
         self.acc += (c + 2.0 * z * s) * h;
         self.given -= self.tension * s * h;
         n * self.tension
+    }
+
+    /// The received wave in force at `t` (before the filter): the last one within its
+    /// hold, else zero.
+    pub fn held(&self, t: SimTime) -> f64 {
+        if t < self.hold_until {
+            self.incoming
+        } else {
+            0.0
+        }
     }
 
     /// The sample this end sends at `t`: the mean outgoing wave since the previous
@@ -290,19 +308,19 @@ impl LineEnd {
             sent,
         };
         if s.span.0 > 0 {
+            self.first_wave.get_or_insert(now);
             self.incoming = s.wave;
             self.hold_until = SimTime(now.0.saturating_add(s.span.0));
         }
     }
 
-    /// Energy the line would still deliver at this end from the wave it holds, were
-    /// the body to stand still (`c² · hold / 4Z`, hold capped at `horizon`) [J].
-    pub fn held_energy(&self, t: SimTime, horizon: SimTime) -> f64 {
-        if t >= self.hold_until {
-            return 0.0;
-        }
-        let hold = SimTime((self.hold_until.0 - t.0).min(horizon.0)).as_secs_f64();
-        self.incoming * self.incoming * hold / (4.0 * self.impedance)
+    /// The most energy the initial wave can give this end's body [J]: `c₀²` over its
+    /// hold (until the first wave arrives, or `now`) and the filter's time constant,
+    /// divided by `4Z` (what a line filled with `c₀` holds for this end).
+    pub fn initial_energy(&self, now: SimTime, h: f64) -> f64 {
+        let hold = self.first_wave.unwrap_or(now).as_secs_f64();
+        let tf = filter_time(self.delay, h);
+        self.initial_wave * self.initial_wave * (hold + tf) / (4.0 * self.impedance)
     }
 }
 
@@ -345,11 +363,9 @@ mod tests {
     #[test]
     fn a_received_wave_is_held_for_its_window_then_dropped() {
         let mut e = end(10.0, 5.0);
-        // Before any arrival the initial wave holds.
-        assert_eq!(
-            e.step(ms(3), 0.001, Vector3::zeros(), Vector3::zeros()).x,
-            5.0
-        );
+        // Before any arrival the initial wave holds (and the filter starts from it).
+        let f = e.step(ms(3), 0.001, Vector3::zeros(), Vector3::zeros());
+        assert_eq!(f.x, 5.0);
         let sample = LineSample {
             link: 0,
             wave: 7.0,
@@ -359,13 +375,12 @@ mod tests {
         };
         e.receive(ms(4), ms(5), &sample);
         assert_eq!(
-            e.step(ms(6), 0.001, Vector3::zeros(), Vector3::zeros()).x,
-            7.0
+            (e.held(ms(5)), e.held(ms(6)), e.held(ms(7))),
+            (7.0, 7.0, 0.0)
         );
-        assert_eq!(
-            e.step(ms(7), 0.001, Vector3::zeros(), Vector3::zeros()).x,
-            0.0
-        );
+        // The filter moves the tension towards the held wave, never past it.
+        let f = e.step(ms(5), 0.001, Vector3::zeros(), Vector3::zeros()).x;
+        assert!(f > 5.0 && f < 7.0, "{f}");
         // An older sample arriving late changes nothing.
         e.receive(
             ms(3),
@@ -375,10 +390,7 @@ mod tests {
                 ..sample
             },
         );
-        assert_eq!(
-            e.step(ms(8), 0.001, Vector3::zeros(), Vector3::zeros()).x,
-            0.0
-        );
+        assert_eq!(e.held(ms(8)), 0.0);
     }
 
     #[test]

@@ -622,7 +622,7 @@ pub struct CouplingSpecFile {
     pub stiffness: Option<f64>,
     /// `passive`: a border link becomes a transmission line when the oldest sample it
     /// can use (`τ + latency` of the channels carrying its data, as in the file) is
-    /// older than this [s], in [0, 1000]; default 0.06 s.
+    /// older than this [s], in [0, 1000]; default 0.04 s.
     #[serde(default)]
     pub lines_above: Option<f64>,
 }

@@ -138,6 +138,18 @@ fn every_coupling_scheme_resumes_bit_for_bit() {
         v["partition"]["coupling"] = json!(coupling);
         check_resume(&format!("coupling_{coupling}"), &v, 0.5035, 3);
     }
+    // Transmission lines (waves in flight, held and filtered waves, open windows):
+    // `tlm` at 5 ms, and the default at 50 ms, where its border links are lines.
+    let mut v = shipped("grid16_time_fixed");
+    v["duration"] = json!(2.0);
+    v["partition"]["coupling"] = json!("tlm");
+    check_resume("coupling_tlm", &v, 0.5035, 3);
+    let mut v = shipped("grid16_time_fixed");
+    v["duration"] = json!(2.0);
+    for c in v["channels"].as_array_mut().expect("channels") {
+        c["tau"] = json!(0.05);
+    }
+    check_resume("coupling_default_50ms", &v, 0.5335, 3);
 }
 
 #[test]

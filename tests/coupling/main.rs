@@ -107,10 +107,11 @@ fn monolithic(v: &Value) -> Value {
 // ---------------------------------------------------------------------------------
 
 #[test]
-fn the_default_coupling_holds_the_thesis_scene_up_to_30_ms_in_both_distributions() {
-    // latency = τ (each sample arrives τ late); 30 s; bound: max |w| < 1 m.
+fn the_default_coupling_holds_the_thesis_scene_up_to_50_ms_in_both_distributions() {
+    // latency = τ (each sample arrives τ late); 30 s; bound: max |w| < 1 m. From 30 ms
+    // on the border links are transmission lines.
     for distribution in ["space", "time"] {
-        for tau in [0.003, 0.005, 0.008, 0.010, 0.015, 0.020, 0.030] {
+        for tau in [0.003, 0.005, 0.008, 0.010, 0.015, 0.020, 0.030, 0.050] {
             let (_, w, error) = run(&thesis(30.0, "default", distribution, tau), &[]);
             eprintln!("{distribution}, τ = {tau}: max |w| = {:.3} m", w.max_w);
             assert!(
@@ -155,9 +156,10 @@ fn at_5_ms_the_default_coupling_is_as_tight_as_monolithic_and_close_to_it() {
 #[test]
 fn the_16_node_scene_stays_bounded_under_the_default_coupling() {
     // 8×8 grid on 16 quadrant nodes, body 1 then body 64 driven, one channel at τ
-    // (latency τ); measured max |w| 0.204 m at 5 ms and 0.854 m at 20 ms (monolithic
-    // 0.231 m); 30 ms and beyond diverge (docs/guide.md "Coupling across partitions").
-    for tau in [0.005, 0.020] {
+    // (latency τ); monolithic max |w| 0.231 m. Under `passive` without lines 30 ms
+    // diverged (9.02 s): the default's lines take over from 30 ms (docs/guide.md
+    // "Coupling across partitions").
+    for tau in [0.005, 0.020, 0.030, 0.050] {
         let v = json!({
             "name": "grid64", "seed": 7, "duration": 30.0, "dt": 0.001,
             "model": {"grid": {"rows": 8, "cols": 8, "spacing": 1.8, "mass": 1.0, "size": 0.2}},
@@ -192,10 +194,17 @@ fn fitted_order(taus: &[f64], errs: &[f64]) -> f64 {
 #[test]
 fn error_against_tau_dt_falls_at_the_fitted_order_of_each_scheme() {
     // The thesis scene over 2 s, each scheme against itself at τ = dt, latency 0.
-    // Measured orders: reset 1.14, predict 2.99, passive 3.27 (the prediction removes
-    // the first-order term of the age; the thresholds leave room for the chaotic net).
+    // Measured orders: reset 1.14, predict 2.99, passive 2.99 (the prediction removes
+    // the first-order term of the age; the thresholds leave room for the chaotic net),
+    // tlm 0.46: a line is a spring of stiffness `Z / T` with `Z` set from τ, so the
+    // scheme itself changes with τ and its error against τ = dt falls slowly.
     let taus = [0.001, 0.002, 0.004, 0.008];
-    for (scheme, lowest) in [("reset", 0.9), ("predict", 2.5), ("passive", 2.5)] {
+    for (scheme, lowest) in [
+        ("reset", 0.9),
+        ("predict", 2.5),
+        ("passive", 2.5),
+        ("tlm", 0.3),
+    ] {
         let mut reference = thesis(2.0, scheme, "space", 0.001);
         for c in reference["channels"].as_array_mut().expect("channels") {
             c["latency"] = json!(0.0);
@@ -343,6 +352,32 @@ fn lost_tdma_frames_never_let_the_passive_coupling_give_more_than_its_tanks() {
 }
 
 #[test]
+fn lost_tdma_frames_never_let_transmission_lines_give_energy() {
+    // The same drifting network at τ = 50 ms, where the default's border links are
+    // lines: a lost wave is never held in its place, so the lines' net work on the
+    // bodies stays below what they started with (nothing: the links start at rest
+    // length). What is lost is tension: with 1084 frames lost in 2.7 s a border line
+    // goes slack past the 1 m bound (measured), which the run reports as divergence.
+    let mut v = thesis(3.0, "default", "space", 0.05);
+    v["network"] = json!({"kind": "tdma", "slot": 0.0002, "cycle": 0.005, "guard": 0.00002,
+                          "link_rate": 20e6, "header_bytes": 26, "drift_ppm": 80000.0});
+    let (world, w, error) = run(&v, &[]);
+    let lost = world.tdma().expect("a tdma world").network().lost();
+    let work: f64 = world.nodes().iter().map(|n| n.line_work()).sum();
+    let stored: f64 = world
+        .nodes()
+        .iter()
+        .map(|n| n.line_initial_energy(world.now()))
+        .sum();
+    eprintln!(
+        "{lost} frames lost; line work {work:.3} J (stored {stored:.3} J); max |w| {:.3} m; {error:?}",
+        w.max_w
+    );
+    assert!(lost > 0, "the drift must cost frames");
+    assert!(stored == 0.0 && work <= 1e-9, "the lines gave {work} J");
+}
+
+#[test]
 fn a_frame_too_long_under_a_predicting_coupling_says_how_to_fit_it() {
     // 100 µs slots at 25 Mbit/s fit `reset`'s 218-byte frames, not the default
     // coupling's 346 bytes (force rates and energy reports added).
@@ -365,20 +400,53 @@ fn a_frame_too_long_under_a_predicting_coupling_says_how_to_fit_it() {
 
 #[test]
 fn transmission_lines_never_give_the_bodies_more_than_they_took() {
-    // Over 60 s undriven (a velocity field, lines at rest), for every τ: the lines' net
-    // work on the bodies is never positive.
-    let (_, m, _) = run(&undriven(false, None, 0.0), &[]);
-    let ke0 = m.kinetic[0];
-    let mono_gain = m.kinetic.iter().fold(0.0, |a: f64, &k| a.max(k)) - ke0;
-    for tau in [0.001, 0.005, 0.020, 0.050] {
-        let (world, w, error) = run(&undriven(false, Some(r#"{"scheme": "tlm"}"#), tau), &[]);
-        let work: f64 = world.nodes().iter().map(|n| n.line_work()).sum();
-        let gain = w.kinetic.iter().fold(0.0, |a: f64, &k| a.max(k)) - ke0;
-        eprintln!(
-            "tlm, τ = {tau}: line work {work:.4} J, kinetic gain {gain:.3} J (monolithic {mono_gain:.3} J), end KE {:.3}{}",
-            w.kinetic.last().unwrap(),
-            error.as_deref().map_or(String::new(), |e| format!("; {e}"))
-        );
-        assert!(work <= 1e-9, "τ = {tau}: the lines gave {work} J");
+    // Over 60 s undriven, for every τ under `tlm`, and where the default makes its
+    // border links lines (from 30 ms; below, the tank test above covers it): the
+    // lines' net work on the bodies never exceeds the energy they start with (the
+    // stretch of the links, held as a wave until the first one arrives and in the
+    // filter: `c₀² · (hold + filter) / 4Z` per end), and the kinetic energy gains at
+    // most what the monolithic run gains plus that (0.5 J slack for the per-step
+    // bookkeeping). Stretched links under `tlm` at τ ≤ 10 ms break the second bound by
+    // up to 2.7 J (measured: 18.9 J against 18.0 J at 1 ms, 15.8 against 13.2 J at
+    // 3 ms) while their lines take 5–42 J in: the energy is the SMC's inside the nodes,
+    // pulling their links in against soft lines, not the lines'. It is not asserted
+    // there; the lines' bound is.
+    for stretched in [false, true] {
+        let (_, m, _) = run(&undriven(stretched, None, 0.0), &[]);
+        let ke0 = m.kinetic[0];
+        let mono_gain = m.kinetic.iter().fold(0.0, |a: f64, &k| a.max(k)) - ke0;
+        let cases = [
+            (
+                r#"{"scheme": "tlm"}"#,
+                &[0.001, 0.003, 0.005, 0.010, 0.020, 0.050][..],
+            ),
+            ("default", &[0.030, 0.050][..]),
+        ];
+        for (coupling, taus) in cases {
+            for &tau in taus {
+                let v = undriven(stretched, Some(coupling), tau);
+                let (world, w, error) = run(&v, &[]);
+                let stored: f64 = world
+                    .nodes()
+                    .iter()
+                    .map(|n| n.line_initial_energy(world.now()))
+                    .sum();
+                let work: f64 = world.nodes().iter().map(|n| n.line_work()).sum();
+                let gain = w.kinetic.iter().fold(0.0, |a: f64, &k| a.max(k)) - ke0;
+                eprintln!(
+                    "stretched {stretched}, {coupling}, τ = {tau}: line work {work:.4} J \
+                     (stored {stored:.4} J), kinetic gain {gain:.3} J (monolithic \
+                     {mono_gain:.3} J){}",
+                    error.as_deref().map_or(String::new(), |e| format!("; {e}"))
+                );
+                assert!(error.is_none(), "{coupling}, τ = {tau}: {error:?}");
+                assert!(work <= stored + 1e-9, "τ = {tau}: the lines gave {work} J");
+                assert!(
+                    (stretched && coupling != "default")
+                        || gain <= mono_gain.max(0.0) + stored + 0.5,
+                    "stretched {stretched}, {coupling}, τ = {tau}: kinetic gain {gain} J"
+                );
+            }
+        }
     }
 }

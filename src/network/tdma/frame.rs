@@ -63,10 +63,11 @@ pub fn broadcast_fragments(entries: usize, per: Option<usize>) -> usize {
 /// a coupling that sends rates adds one rate per force and torque value, and the
 /// `passive` one its energy report (one value).
 pub fn floats_per_route(kind: DataKind, rigid: bool, coupling: Coupling, lines: usize) -> usize {
-    // A transmission line's sample: wave, window length, anchor position and velocity.
-    const LINE: usize = 8;
+    // A transmission line's sample: wave and window length, and on a force route the
+    // anchor's position and velocity (a state route's receiver has them from the state
+    // it carries: the same values).
     if kind == DataKind::Force && lines > 0 {
-        return LINE;
+        return 8;
     }
     let loads = if rigid { 6 } else { 3 };
     let base = match (kind, rigid) {
@@ -77,7 +78,7 @@ pub fn floats_per_route(kind: DataKind, rigid: bool, coupling: Coupling, lines: 
     };
     let rates = if coupling.predicts() { loads } else { 0 };
     let energy = usize::from(coupling.tank().is_some());
-    base + rates + energy + lines * LINE
+    base + rates + energy + lines * 2
 }
 
 /// The sending TDMA nodes of each channel (sorted, without repeats), from its routes.
@@ -239,6 +240,10 @@ mod tests {
         assert_eq!(floats_per_route(DataKind::Force, true, p, 0), 12);
         assert_eq!(floats_per_route(DataKind::State, false, e, 0), 13);
         assert_eq!(floats_per_route(DataKind::Force, true, e, 0), 13);
+        // A line: 2 values more per line on a state route; its own sample on a force
+        // route.
+        assert_eq!(floats_per_route(DataKind::State, false, e, 2), 17);
+        assert_eq!(floats_per_route(DataKind::Force, false, e, 1), 8);
     }
 
     #[test]

@@ -87,6 +87,13 @@ impl Node {
         Some((self.anchor(e.body, &e.anchor)[0], e.tension))
     }
 
+    /// The most energy the lines' initial waves can give this node's bodies [J], at
+    /// `now` (see [`crate::partition::line::LineEnd::initial_energy`]).
+    pub fn line_initial_energy(&self, now: SimTime) -> f64 {
+        let h = self.system.dt().as_secs_f64();
+        self.lines.iter().map(|e| e.initial_energy(now, h)).sum()
+    }
+
     /// Energy the lines gave this node's bodies so far, `Σ ∫ −T s dt` [J] (negative:
     /// the lines took it).
     pub fn line_work(&self) -> f64 {

@@ -233,8 +233,9 @@ pub(super) fn check_tdma(s: &Scenario) -> Result<()> {
                 path,
                 message: format!(
                     "{message}; the partition's coupling sends force rates (and, passive, \
-                     energy reports) with every message: widen the slot, raise the link \
-                     rate, or use \"coupling\": \"reset\""
+                     energy reports and the waves of its transmission lines) with every \
+                     message: widen the slot, raise the link rate, or use \"coupling\": \
+                     \"reset\""
                 ),
             },
             other => other,

@@ -82,7 +82,7 @@ pub const DEFAULT_EXTRAPOLATE: f64 = 0.01;
 /// partitions" gives the measurements behind both).
 pub const DEFAULT_STIFFNESS: f64 = 400.0;
 /// See [`DEFAULT_STIFFNESS`].
-pub const DEFAULT_LINES_ABOVE: f64 = 0.06;
+pub const DEFAULT_LINES_ABOVE: f64 = 0.04;
 
 /// `partition.coupling`.
 fn coupling(c: &CouplingFile) -> Result<Coupling> {
