@@ -792,6 +792,27 @@ impl CoSim {
                     ),
                 })
             }
+            EvalError::Solve(crate::multibody::solver::SolveError::CgBudget {
+                iterations,
+                residual,
+                worst,
+                solves,
+                link,
+                violation,
+                bound,
+            }) => Error::Numerical {
+                time: t,
+                message: format!(
+                    "node {}: the CG budget (solver.max_iterations = {iterations} per solve) cannot hold \
+                     the constraints: {solves} consecutive solves stopped at the budget with a \
+                     residual that alone holds a link off by {residual:.3e} m (SMC: ε μ²‖r‖∞/K; \
+                     worst {worst:.3e} m), and link L{} now has |w| = {violation:.3e} m, \
+                     beyond divergence.max_violation = {bound} m; raise solver.max_iterations or \
+                     use \"solver\": {{\"kind\": \"cholesky_amd\"}}",
+                    node + 1,
+                    self.nodes[node].links[link] + 1
+                ),
+            },
             EvalError::Solve(_) => Error::Numerical {
                 time: t,
                 message: format!(

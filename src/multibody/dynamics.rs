@@ -43,6 +43,7 @@ impl System {
         self.solver
             .solve(&self.geo, &self.mass, &self.ws.rhs, &mut self.ws.sol)
             .map_err(EvalError::Solve)?;
+        self.check_cg_budget().map_err(EvalError::Solve)?;
         self.rates_from_solution(state, out);
         Ok(())
     }

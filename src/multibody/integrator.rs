@@ -90,6 +90,7 @@ impl System {
                     *error = sys
                         .solver
                         .solve(&sys.geo, &sys.mass, &sys.ws.rhs, &mut sys.ws.sol)
+                        .and_then(|()| sys.check_cg_budget())
                         .err();
                 }
             }

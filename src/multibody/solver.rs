@@ -53,6 +53,28 @@ pub enum SolveError {
     /// The Cholesky factorization met a non-positive pivot (`A` singular: redundant
     /// links, or non-finite geometry).
     NotPositiveDefinite,
+    /// The CG budget cannot hold the constraints: for `solves` consecutive solves CG
+    /// stopped at its budget with a residual that alone holds a link off by a visible
+    /// part of `divergence.max_violation` (see
+    /// [`crate::multibody::System::check_cg_budget`]), and link `link` (0-based, of
+    /// this system) now violates that bound.
+    CgBudget {
+        /// The iteration budget per solve (`solver.max_iterations`).
+        iterations: usize,
+        /// The violation the last solve's residual alone holds [m] (SMC:
+        /// `max_l ε μ_l² |r_l| / K`; Baumgarte: `‖r‖∞ / β²`).
+        residual: f64,
+        /// The largest such residual of the run of stalled solves.
+        worst: f64,
+        /// Consecutive stalled solves.
+        solves: usize,
+        /// The violating link (0-based, local to the system).
+        link: usize,
+        /// Its `|w|` [m].
+        violation: f64,
+        /// `divergence.max_violation` [m].
+        bound: f64,
+    },
 }
 
 /// One contribution to an entry of `A` through a shared body.
@@ -136,6 +158,12 @@ impl JsSolver {
     /// Iterations of the last CG solve (0 on the exact path).
     pub fn last_iterations(&self) -> usize {
         self.cg.as_ref().map_or(0, cg::Cg::last_iterations)
+    }
+
+    /// When the last solve was a CG solve that stopped at its iteration budget above its
+    /// tolerance: its residual `b − A x` per link and the budget.
+    pub(crate) fn cg_residual_at_budget(&self) -> Option<(&[f64], usize)> {
+        self.cg.as_ref().and_then(cg::Cg::residual_at_budget)
     }
 
     /// Solves `A x = b`. On entry `x` holds the warm start (used by CG only).

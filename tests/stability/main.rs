@@ -689,3 +689,73 @@ fn bodies_a_micrometre_apart() {
         "{e}"
     );
 }
+
+// ---------------------------------------------------------------------------------
+// A CG budget too small for the asked accuracy
+// ---------------------------------------------------------------------------------
+
+/// `scenarios/grid64_tight.json`'s settings (RK4 at 1 ms, SMC μ = 2 ms, K = 200 m/s,
+/// ε = 0.1 m, `divergence.max_violation` = 1e-4 m) on an 8×8 grid for 0.5 s, with
+/// CG at exactly `iterations` iterations per solve.
+fn tight_grid8(iterations: usize) -> Value {
+    json!({
+        "name": "tight8", "seed": 7, "duration": 0.5, "dt": 0.001, "integrator": "rk4",
+        "stabilizer": {"kind": "smc", "mu": 0.002, "k": 200.0, "epsilon": 0.1},
+        "solver": {"kind": "cg", "max_iterations": iterations, "tolerance": 0.0},
+        "model": {"grid": {"rows": 8, "cols": 8, "spacing": 1.8, "mass": 1.0, "size": 0.2}},
+        "forces": [{"body": 1, "amplitude": [0, 0, 20], "omega": 2.0, "phase": 0.0}],
+        "divergence": {"max_violation": 1e-4},
+        "output": {"decimation": 10}
+    })
+}
+
+/// Measured: CG 1 on the tight 8×8 scene stops at t = 0.147 s (its residual alone
+/// holds a link off by ~1e-4 m, as much as the bound); CG 5 holds max |w| = 1.0e-7 m
+/// over the 0.5 s.
+#[test]
+fn a_cg_budget_that_cannot_hold_tight_constraints_stops_with_an_error_naming_it() {
+    let e = run_to_files("cg_budget_1", &tight_grid8(1)).unwrap_err();
+    eprintln!("CG 1 on the tight scene: {e}");
+    let Error::Numerical { time, message } = &e else {
+        panic!("expected the CG budget error, got {e}");
+    };
+    assert!(time.as_secs_f64() > 0.0 && time.as_secs_f64() < 0.5, "{e}");
+    for part in [
+        "node 1",
+        "CG budget (solver.max_iterations = 1 per solve)",
+        "holds a link off by",
+        "divergence.max_violation = 0.0001 m",
+        "raise solver.max_iterations",
+        "cholesky_amd",
+    ] {
+        assert!(message.contains(part), "missing {part:?} in: {e}");
+    }
+    // A budget that can hold it runs to the end, well inside the bound.
+    let r = quiet(&tight_grid8(5));
+    eprintln!("CG 5 on the tight scene: max |w| = {:.3e} m", r.max_w);
+    assert!(r.result.is_ok(), "{:?}", r.result.err());
+    assert!(r.max_w < 1e-5, "max |w| = {}", r.max_w);
+}
+
+/// Loose CG is the fast end of the trade by design: the thesis scene with a single CG
+/// iteration per solve runs its 30 s (its residuals exceed the SMC gain, μ²‖r‖∞ > K,
+/// for up to 175 solves in a row, but its violation stays under the 1 m bound), and
+/// so does CG 10 on a 16×16 grid at the thesis's settings.
+#[test]
+fn loose_cg_runs_are_not_stopped_by_the_budget_check() {
+    let mut v = thesis(1e-3, 30.0);
+    v["solver"] = json!({"kind": "cg", "max_iterations": 1, "tolerance": 0.0});
+    v["forces"] = json!([
+        {"body": 1, "amplitude": [0, 0, 20], "omega": 2.0, "from": 0.0, "until": 12.0},
+        {"body": 16, "amplitude": [0, 0, 20], "omega": 2.0, "from": 12.0, "until": 24.0}
+    ]);
+    let r = quiet(&v);
+    eprintln!("thesis scene, CG 1, 30 s: max |w| = {:.3e} m", r.max_w);
+    assert!(r.result.is_ok(), "{:?}", r.result.err());
+    let mut v = thesis(1e-3, 3.0);
+    v["model"]["grid"] = json!({"rows": 16, "cols": 16, "spacing": 1.8, "mass": 1.0, "size": 0.2});
+    v["solver"] = json!({"kind": "cg", "max_iterations": 10, "tolerance": 0.0});
+    let r = quiet(&v);
+    eprintln!("16×16, CG 10, 3 s: max |w| = {:.3e} m", r.max_w);
+    assert!(r.result.is_ok(), "{:?}", r.result.err());
+}

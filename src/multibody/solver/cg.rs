@@ -88,6 +88,9 @@ pub(super) struct Cg {
     p: Vec<f64>,
     ap: Vec<f64>,
     last_iterations: usize,
+    /// The last solve used its whole budget without reaching its tolerance; `r` then
+    /// holds its residual.
+    at_budget: bool,
 }
 
 impl Cg {
@@ -191,12 +194,20 @@ impl Cg {
             p: vec![0.0; m],
             ap: vec![0.0; m],
             last_iterations: 0,
+            at_budget: false,
         }
     }
 
     /// Iterations of the last solve.
     pub(super) fn last_iterations(&self) -> usize {
         self.last_iterations
+    }
+
+    /// When the last solve stopped at its iteration budget with `|r| > tolerance |b|`:
+    /// its residual `r = b − A x` (as CG updates it, one entry per link) and the budget.
+    pub(super) fn residual_at_budget(&self) -> Option<(&[f64], usize)> {
+        self.at_budget
+            .then(|| (&self.r[..self.diag_slot.len()], self.max_iterations))
     }
 
     /// Fills `values` with `A` at the current geometry, and the preconditioner.
@@ -258,6 +269,7 @@ impl Cg {
         x: &mut [f64],
     ) -> Result<(), SolveError> {
         self.last_iterations = 0;
+        self.at_budget = false;
         let b_norm = b.iter().map(|v| v * v).sum::<f64>().sqrt();
         if b_norm == 0.0 {
             x.fill(0.0);
@@ -309,6 +321,7 @@ impl Cg {
             }
             self.last_iterations = it + 1;
         }
+        self.at_budget = self.last_iterations == self.max_iterations && rr.sqrt() > goal;
         Ok(())
     }
 }
