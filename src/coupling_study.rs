@@ -45,13 +45,20 @@ use crate::output::create_dir_all;
 use crate::scenario::{parse_str, Scenario};
 
 /// The schemes the study compares: a label and the `partition.coupling` value (JSON).
-/// `passive` is the default (10 J tank); `passive 1 J` shows what a tenfold tighter
-/// energy bound costs in accuracy.
-pub const SCHEMES: [(&str, &str); 4] = [
+/// `passive` is the default (10 J tank, transmission lines where a border's samples
+/// can be older than 40 ms); `passive, no lines` is the same predictor and tank on
+/// every border, what the default was before lines; `passive 1 J` shows what a tenfold
+/// tighter energy bound costs in accuracy; `tlm` makes every border link a line.
+pub const SCHEMES: [(&str, &str); 6] = [
     ("reset", r#""reset""#),
     ("predict", r#""predict""#),
     ("passive", r#""passive""#),
+    (
+        "passive, no lines",
+        r#"{"scheme": "passive", "lines_above": 1000}"#,
+    ),
     ("passive 1 J", r#"{"scheme": "passive", "tank": 1.0}"#),
+    ("tlm", r#""tlm""#),
 ];
 
 /// Each cell's wall time is the fastest of this many runs (the first one also records).

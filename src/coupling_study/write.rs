@@ -3,7 +3,7 @@
 use std::path::Path;
 
 use super::{Cell, DISTRIBUTIONS, SCHEMES};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::output::write_atomic;
 use crate::report::{write_line_plot, LinePlot, Scale, Series};
 
@@ -16,26 +16,41 @@ fn cost_ratio(cells: &[Cell], cell: &Cell) -> f64 {
 }
 
 pub(super) fn write_csv(out: &Path, cells: &[Cell]) -> Result<()> {
-    let mut text = String::from(
-        "scheme,distribution,tau,bounded,max_w,err_vs_monolithic_0_3s,err_vs_tau_dt_0_3s,\
-         energy_drift_undriven,cost_per_step_vs_reset,error\n",
-    );
+    let path = out.join("coupling.csv");
+    let csv_error = |e: csv::Error| Error::io(path.display().to_string(), std::io::Error::other(e));
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record([
+        "scheme",
+        "distribution",
+        "tau",
+        "bounded",
+        "max_w",
+        "err_vs_monolithic_0_3s",
+        "err_vs_tau_dt_0_3s",
+        "energy_drift_undriven",
+        "cost_per_step_vs_reset",
+        "error",
+    ])
+    .map_err(csv_error)?;
     for c in cells {
-        text.push_str(&format!(
-            "{},{},{},{},{},{},{},{},{},\"{}\"\n",
-            c.scheme,
-            c.distribution,
-            c.tau,
-            c.bounded(),
-            c.max_w,
-            c.err_mono,
-            c.err_dt,
-            c.energy_drift,
-            cost_ratio(cells, c),
-            c.error.clone().unwrap_or_default().replace('"', "'")
-        ));
+        w.write_record([
+            c.scheme.to_string(),
+            c.distribution.to_string(),
+            c.tau.to_string(),
+            c.bounded().to_string(),
+            c.max_w.to_string(),
+            c.err_mono.to_string(),
+            c.err_dt.to_string(),
+            c.energy_drift.to_string(),
+            cost_ratio(cells, c).to_string(),
+            c.error.clone().unwrap_or_default(),
+        ])
+        .map_err(csv_error)?;
     }
-    write_atomic(&out.join("coupling.csv"), text.as_bytes())
+    let text = w
+        .into_inner()
+        .map_err(|e| Error::io(path.display().to_string(), e.into_error()))?;
+    write_atomic(&path, &text)
 }
 
 pub(super) fn fmt(x: f64) -> String {

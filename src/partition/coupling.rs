@@ -25,7 +25,10 @@
 //!   further out, and on the thesis scene a 100-ms extrapolation gave border bodies
 //!   forces of the wrong sign (both ends of a link gaining energy at once).
 //! - **`passive`**: `predict` over an energy account per border port ([`PortAccount`];
-//!   the booking and the passivity controller are in `node/passivity.rs`).
+//!   the booking and the passivity controller are in `node/passivity.rs`), and
+//!   transmission lines ([`super::line`]) on the border links whose samples can be
+//!   older than `lines_above`.
+//! - **`tlm`**: every border link is a transmission line ([`super::line`]).
 //!
 //! A sample whose snapshot is gone (it arrived after a later sample of its route, which
 //! only a jitter larger than the sampling period can do) is compared with the ghost's

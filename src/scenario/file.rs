@@ -538,11 +538,14 @@ pub struct PartitionFile {
     pub ghosts: GhostsFile,
     /// How a node uses border data that arrives `age` late: `"reset"` (overwrite the
     /// ghost, hold the force), `"predict"` (correct the ghost by its prediction error
-    /// at the sample's time, apply `F + Ḟ·age`) or `"passive"` (predict over an energy
-    /// tank per border port), or an object `{"scheme": …, "tank": J, "extrapolate": s}`;
-    /// default `"passive"` with a 10 J tank and 0.01 s of extrapolation (bounded on the
-    /// thesis scene up to τ = 30 ms and the most accurate there; see docs/guide.md "Coupling
-    /// across partitions").
+    /// at the sample's time, apply `F + Ḟ·age`), `"passive"` (predict over an energy
+    /// tank per border port, transmission lines where the data can be older than
+    /// `lines_above`) or `"tlm"` (every border link a transmission line), or an object
+    /// `{"scheme": …, "tank": J, "extrapolate": s, "stiffness": N/m, "lines_above": s}`;
+    /// default `"passive"` with a 10 J tank, 0.01 s of extrapolation and 400 N/m lines
+    /// above 0.04 s (bounded on the thesis scene and the 16-node scene up to τ = 50 ms
+    /// and the most accurate scheme there; see docs/guide.md "Coupling across
+    /// partitions").
     #[serde(default)]
     pub coupling: CouplingFile,
     /// Owners of chosen border links, overriding the default rule (the thesis ring for
