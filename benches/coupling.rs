@@ -4,7 +4,8 @@
 //! Run: `cargo bench --bench coupling`. Every case simulates 1 s of `grid16_space_fixed`
 //! (4×4 grid on 4 quadrant nodes, both channels at τ = 5 ms, latency = τ; 1000
 //! lock-steps) from a fresh copy of a world built outside the timed closure, under
-//! `reset`, `predict` and `passive`; and 1 s of a 16×16 grid (256 bodies, body 1 driven)
+//! `reset`, `predict`, `passive` and `tlm` (every border link a transmission line);
+//! and 1 s of a 16×16 grid (256 bodies, body 1 driven)
 //! on 4 nodes of 8×8 bodies, one channel at 5 ms, latency 5 ms, under `reset` and
 //! `passive` (`big_*`): the coupling's work grows with the border, a node's step with
 //! its bodies. After criterion has measured them, the bench prints each case's wall
@@ -20,7 +21,14 @@ use dsmcosim::scenario::parse_str;
 use serde_json::json;
 
 const GROUP: &str = "coupling_1s";
-const CASES: [&str; 5] = ["reset", "predict", "passive", "big_reset", "big_passive"];
+const CASES: [&str; 6] = [
+    "reset",
+    "predict",
+    "passive",
+    "tlm",
+    "big_reset",
+    "big_passive",
+];
 
 fn world(case: &str) -> CoSim {
     if let Some(scheme) = case.strip_prefix("big_") {
