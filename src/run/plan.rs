@@ -119,6 +119,8 @@ pub struct RunPlan {
     pub solver: Value,
     /// Coupling scheme of a partitioned scene.
     pub coupling: Option<String>,
+    /// Border links that are transmission lines: (link name, impedance `Z` [N·s/m]).
+    pub lines: Vec<(String, f64)>,
     /// Network kind.
     pub network: String,
     /// Computing nodes.
@@ -242,6 +244,12 @@ pub fn plan(scenario: &Scenario) -> Result<RunPlan> {
         stabilizer: super::stabilizer_json(s),
         solver: super::solver_json(s),
         coupling: s.partition.as_ref().map(|p| p.coupling.name().to_string()),
+        lines: {
+            let set = crate::partition::line::LineSet::new(s, &layout.routes);
+            (0..s.links.len())
+                .filter_map(|l| set.impedance(l).map(|z| (format!("L{}", l + 1), z)))
+                .collect()
+        },
         network: match s.network {
             NetworkSpec::Ideal => "ideal".into(),
             NetworkSpec::Tdma(_) => "tdma".into(),
@@ -301,6 +309,22 @@ impl RunPlan {
                     n.bodies,
                     n.ghosts,
                     n.links.join(" ")
+                ));
+            }
+            if !self.lines.is_empty() {
+                let names: Vec<&str> = self.lines.iter().map(|l| l.0.as_str()).collect();
+                let (lo, hi) = self
+                    .lines
+                    .iter()
+                    .fold((f64::MAX, 0.0f64), |(a, b), l| (a.min(l.1), b.max(l.1)));
+                let z = if lo == hi {
+                    format!("{lo}")
+                } else {
+                    format!("{lo}–{hi}")
+                };
+                out.push(format!(
+                    "  transmission lines (Z = {z} N·s/m): {}",
+                    names.join(" ")
                 ));
             }
         }
@@ -404,6 +428,34 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn the_plan_names_the_transmission_lines() {
+        // At 5 ms (age up to 10 ms) the default coupling has no lines; at 50 ms every
+        // border link is one, of impedance 400 N/m · (τ + latency) = 40 N·s/m.
+        let p = plan(&shipped("grid16_space_fixed", 1.0)).unwrap();
+        assert!(p.lines.is_empty());
+        let mut v: Value = serde_json::from_str(
+            &std::fs::read_to_string(format!(
+                "{}/scenarios/grid16_space_fixed.json",
+                env!("CARGO_MANIFEST_DIR")
+            ))
+            .unwrap(),
+        )
+        .unwrap();
+        v["channels"][0]["tau"] = serde_json::json!(0.05);
+        v["channels"][1]["tau"] = serde_json::json!(0.05);
+        let p = plan(&crate::scenario::parse_str(&v.to_string(), "t").unwrap()).unwrap();
+        let names: Vec<&str> = p.lines.iter().map(|l| l.0.as_str()).collect();
+        assert_eq!(
+            names,
+            ["L3", "L9", "L10", "L11", "L13", "L14", "L17", "L23"]
+        );
+        assert!(p.lines.iter().all(|l| (l.1 - 40.0).abs() < 1e-9));
+        assert!(p
+            .text()
+            .contains("transmission lines (Z = 40 N·s/m): L3 L9"));
     }
 
     #[test]
