@@ -3,12 +3,14 @@
 use std::sync::Arc;
 
 use nalgebra::Vector3;
+use rayon::prelude::*;
 
 use super::{Event, TdmaLink};
 use crate::control::CostMeter;
 use crate::error::{Divergence, Error, Place, Result};
 use crate::kernel::{EventClass, Kernel, SimTime};
 use crate::multibody::dynamics::EvalError;
+use crate::multibody::solver::BATCH;
 use crate::multibody::System;
 use crate::network::tdma::{tdma_node, CycleReport, TdmaError};
 use crate::network::{Channel, Message, Payload};
@@ -176,6 +178,21 @@ pub struct CoSim {
     messages: u64,
     events: u64,
     max_violation: f64,
+    /// Links per lock-step (over every node's system) from which the nodes step in
+    /// parallel on rayon ([`PARALLEL_MIN_LINKS`] unless set). Not part of the world's
+    /// state: a checkpoint does not store it, and it changes no bit of a run.
+    #[serde(skip, default = "parallel_min_links_default")]
+    parallel_min_links: usize,
+}
+
+/// Links per lock-step (summed over the nodes' own systems, ghosts' links included) from
+/// which the nodes of a world with two or more nodes step in parallel when rayon has more
+/// than one thread. Below it a step is too short for rayon's fork and join to pay (the
+/// measurements that chose it: docs/performance.md, "Parallel lock-step").
+pub const PARALLEL_MIN_LINKS: usize = 1024;
+
+fn parallel_min_links_default() -> usize {
+    PARALLEL_MIN_LINKS
 }
 
 impl CoSim {
@@ -263,7 +280,23 @@ impl CoSim {
             messages: 0,
             events: 0,
             max_violation: 0.0,
+            parallel_min_links: PARALLEL_MIN_LINKS,
         }
+    }
+
+    /// Steps the nodes in parallel from `links` links per lock-step on (0: whenever
+    /// there are two nodes and two rayon threads; `usize::MAX`: never). The result is
+    /// the same bits either way; benches and tests use it to compare the two paths.
+    pub fn set_parallel_min_links(&mut self, links: usize) {
+        self.parallel_min_links = links;
+    }
+
+    /// Whether the next lock-step runs its nodes in parallel: two nodes or more, at
+    /// least [`PARALLEL_MIN_LINKS`] (or the set threshold) links per lock-step, and more
+    /// than one thread in the current rayon pool.
+    pub fn steps_in_parallel(&self) -> bool {
+        let links: usize = self.nodes.iter().map(|n| n.system.link_count()).sum();
+        self.nodes.len() > 1 && links >= self.parallel_min_links && rayon::current_num_threads() > 1
     }
 
     /// The scenario being run.
@@ -688,13 +721,21 @@ impl CoSim {
     fn step(&mut self, t: SimTime, obs: &mut dyn Observer) -> Result<()> {
         let k = self.steps_done;
         let last = k == self.scenario.steps;
-        for node in &mut self.nodes {
-            node.prepare_step(t);
-        }
+        let parallel = self.steps_in_parallel();
         // The nodes share nothing during a step: their rate evaluations are batched
-        // (results and first error as if evaluated one after another in node order).
-        let nodes = self.nodes.iter_mut().map(|n| (&mut n.system, &n.state));
-        System::begin_steps(t, nodes).map_err(|(n, e)| self.eval_error(t, n, e))?;
+        // (results and first error as if evaluated one after another in node order),
+        // on rayon when the step is large enough; each node's values are the same bits
+        // on any thread, and the first error is the lowest node's.
+        if parallel {
+            begin_parallel(&mut self.nodes, t)
+        } else {
+            for node in &mut self.nodes {
+                node.prepare_step(t);
+            }
+            let nodes = self.nodes.iter_mut().map(|n| (&mut n.system, &n.state));
+            System::begin_steps(t, nodes)
+        }
+        .map_err(|(n, e)| self.eval_error(t, n, e))?;
         self.gather();
         self.check(t)?;
         let values = StepValues {
@@ -713,12 +754,12 @@ impl CoSim {
             return Ok(());
         }
         self.meter.add(&self.w);
-        for n in 0..self.nodes.len() {
-            let node = &mut self.nodes[n];
-            node.system
-                .finish_step(t, &mut node.state)
-                .map_err(|e| self.eval_error(t, n, e))?;
-            self.nodes[n].restore_held_ghosts();
+        if parallel {
+            finish_parallel(&mut self.nodes, t).map_err(|(n, e)| self.eval_error(t, n, e))?;
+        } else {
+            for n in 0..self.nodes.len() {
+                finish_node(&mut self.nodes[n], t).map_err(|e| self.eval_error(t, n, e))?;
+            }
         }
         self.next_step = Some(SimTime(t.0 + self.scenario.dt.0));
         Ok(())
@@ -823,4 +864,56 @@ impl CoSim {
             },
         }
     }
+}
+
+/// The second half of node `node`'s step at `t` (the first error stops it where the
+/// serial lock-step stops).
+fn finish_node(node: &mut Node, t: SimTime) -> std::result::Result<(), EvalError> {
+    node.system.finish_step(t, &mut node.state)?;
+    node.restore_held_ghosts();
+    Ok(())
+}
+
+/// Each node's border loads and rates at `t`, the nodes spread over rayon's threads;
+/// the error of the lowest node that fails, as the serial lock-step reports it.
+///
+/// Nodes with the dense exact solve go in chunks of [`BATCH`] (their solves interleave
+/// as in [`System::begin_steps`]), any other node on its own. Every node is prepared
+/// and evaluated, and the errors are reduced to the lowest node's, whatever thread
+/// finished first. Unlike the serial loop, nodes after a failing one have been
+/// evaluated too, which nothing reads: the run stops with that error, and an
+/// evaluation touches only the node's system (its workspace), not its state or its
+/// port accounts; every node is prepared, as in the serial lock-step.
+fn begin_parallel(nodes: &mut [Node], t: SimTime) -> std::result::Result<(), (usize, EvalError)> {
+    let chunk = if nodes.iter().all(|n| n.system.solver.is_dense()) {
+        BATCH
+    } else {
+        1
+    };
+    let first = nodes
+        .par_chunks_mut(chunk)
+        .enumerate()
+        .filter_map(|(c, group)| {
+            for node in group.iter_mut() {
+                node.prepare_step(t);
+            }
+            let systems = group.iter_mut().map(|n| (&mut n.system, &n.state));
+            System::begin_steps(t, systems)
+                .err()
+                .map(|(i, e)| (c * chunk + i, e))
+        })
+        .min_by_key(|&(n, _)| n);
+    first.map_or(Ok(()), Err)
+}
+
+/// [`finish_node`] of every node, spread over rayon's threads; the lowest failing
+/// node's error (the run stops with it: the states of the nodes after it, stepped here
+/// and not in the serial loop, are not read).
+fn finish_parallel(nodes: &mut [Node], t: SimTime) -> std::result::Result<(), (usize, EvalError)> {
+    let first = nodes
+        .par_iter_mut()
+        .enumerate()
+        .filter_map(|(n, node)| finish_node(node, t).err().map(|e| (n, e)))
+        .min_by_key(|&(n, _)| n);
+    first.map_or(Ok(()), Err)
 }
