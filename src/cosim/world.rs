@@ -736,8 +736,12 @@ impl CoSim {
             System::begin_steps(t, nodes)
         }
         .map_err(|(n, e)| self.eval_error(t, n, e))?;
-        self.gather();
-        self.check(t)?;
+        if parallel {
+            self.gather_check_parallel(t)?;
+        } else {
+            self.gather();
+            self.check(t)?;
+        }
         let values = StepValues {
             step: k,
             time: t,
@@ -767,18 +771,14 @@ impl CoSim {
 
     /// Copies each link's and body's values from the node that owns it.
     fn gather(&mut self) {
-        for (l, &(n, ll)) in self.link_home.iter().enumerate() {
-            if let Some((na, nb)) = self.line_ends[l] {
-                // A line: its true length from both ends' anchors, the owner's tension.
-                let (pa, ta) = self.nodes[na].line_end(l).unwrap_or_default();
-                let (pb, tb) = self.nodes[nb].line_end(l).unwrap_or_default();
-                self.w[l] = (pa - pb).norm() - self.scenario.links[l].length;
-                self.f[l] = if n == na { ta } else { tb };
-                continue;
-            }
-            let node = &self.nodes[n];
-            self.w[l] = node.system.violations()[ll];
-            self.f[l] = node.system.tension(&node.state, ll);
+        for l in 0..self.w.len() {
+            (self.w[l], self.f[l]) = link_values(
+                &self.nodes,
+                &self.scenario,
+                self.link_home[l],
+                self.line_ends[l],
+                l,
+            );
         }
         for (b, &(n, lb)) in self.body_home.iter().enumerate() {
             self.p[b] = self.nodes[n].state.p[lb];
@@ -790,32 +790,103 @@ impl CoSim {
     fn check(&mut self, t: SimTime) -> Result<()> {
         let bound = self.scenario.max_violation;
         for (l, (&w, &f)) in self.w.iter().zip(&self.f).enumerate() {
-            let what = if !w.is_finite() || !f.is_finite() {
-                format!("non-finite w = {w} or f = {f}")
-            } else if w.abs() > bound {
-                format!("|w| = {} m exceeds the bound {bound} m", w.abs())
-            } else {
-                self.max_violation = self.max_violation.max(w.abs());
-                continue;
-            };
-            return Err(Error::Diverged(Divergence {
-                time: t,
-                node: self.link_home[l].0 + 1,
-                place: Place::Link(l + 1),
-                what,
-            }));
+            match link_fault(w, f, bound) {
+                None => self.max_violation = self.max_violation.max(w.abs()),
+                Some(what) => return Err(self.link_diverged(t, l, what)),
+            }
         }
         for (b, (p, v)) in self.p.iter().zip(&self.v).enumerate() {
-            if !(p.iter().chain(v.iter()).all(|x| x.is_finite())) {
-                return Err(Error::Diverged(Divergence {
-                    time: t,
-                    node: self.body_home[b].0 + 1,
-                    place: Place::Body(self.scenario.bodies[b].id),
-                    what: "non-finite position or velocity".into(),
-                }));
+            if !body_finite(p, v) {
+                return Err(self.body_diverged(t, b));
             }
         }
         Ok(())
+    }
+
+    /// [`gather`](Self::gather) and [`check`](Self::check) on rayon's threads, in chunks
+    /// of links and of bodies: the same copies, and the same reduction in link then
+    /// body order after the parallel part (the largest `|w|` of the links before the
+    /// first that fails, which is exact in any grouping, then that link's error, else
+    /// the first non-finite body's).
+    fn gather_check_parallel(&mut self, t: SimTime) -> Result<()> {
+        const CHUNK: usize = 512;
+        let bound = self.scenario.max_violation;
+        let (nodes, scenario) = (&self.nodes, &*self.scenario);
+        let (link_home, line_ends) = (&self.link_home, &self.line_ends);
+        let body_home = &self.body_home;
+        let (w, f, p, v) = (&mut self.w, &mut self.f, &mut self.p, &mut self.v);
+        let (links, bodies) = rayon::join(
+            || {
+                w.par_chunks_mut(CHUNK)
+                    .zip(f.par_chunks_mut(CHUNK))
+                    .enumerate()
+                    .map(|(c, (w, f))| {
+                        let (mut max, mut fault) = (0.0f64, None);
+                        for (i, (w, f)) in w.iter_mut().zip(f.iter_mut()).enumerate() {
+                            let l = c * CHUNK + i;
+                            (*w, *f) = link_values(nodes, scenario, link_home[l], line_ends[l], l);
+                            if fault.is_some() {
+                                continue;
+                            }
+                            match link_fault(*w, *f, bound) {
+                                None => max = max.max(w.abs()),
+                                Some(what) => fault = Some((l, what)),
+                            }
+                        }
+                        (max, fault)
+                    })
+                    .collect::<Vec<_>>()
+            },
+            || {
+                p.par_chunks_mut(CHUNK)
+                    .zip(v.par_chunks_mut(CHUNK))
+                    .enumerate()
+                    .map(|(c, (p, v))| {
+                        let mut fault = None;
+                        for (i, (p, v)) in p.iter_mut().zip(v.iter_mut()).enumerate() {
+                            let b = c * CHUNK + i;
+                            let (n, lb) = body_home[b];
+                            *p = nodes[n].state.p[lb];
+                            *v = nodes[n].state.v[lb];
+                            if fault.is_none() && !body_finite(p, v) {
+                                fault = Some(b);
+                            }
+                        }
+                        fault
+                    })
+                    .collect::<Vec<_>>()
+            },
+        );
+        for (max, fault) in links {
+            self.max_violation = self.max_violation.max(max);
+            if let Some((l, what)) = fault {
+                return Err(self.link_diverged(t, l, what));
+            }
+        }
+        match bodies.into_iter().flatten().next() {
+            Some(b) => Err(self.body_diverged(t, b)),
+            None => Ok(()),
+        }
+    }
+
+    /// Link `l` diverged at `t`: `what`.
+    fn link_diverged(&self, t: SimTime, l: usize, what: String) -> Error {
+        Error::Diverged(Divergence {
+            time: t,
+            node: self.link_home[l].0 + 1,
+            place: Place::Link(l + 1),
+            what,
+        })
+    }
+
+    /// Body `b`'s position or velocity is not finite at `t`.
+    fn body_diverged(&self, t: SimTime, b: usize) -> Error {
+        Error::Diverged(Divergence {
+            time: t,
+            node: self.body_home[b].0 + 1,
+            place: Place::Body(self.scenario.bodies[b].id),
+            what: "non-finite position or velocity".into(),
+        })
     }
 
     fn eval_error(&self, t: SimTime, node: usize, e: EvalError) -> Error {
@@ -916,4 +987,44 @@ fn finish_parallel(nodes: &mut [Node], t: SimTime) -> std::result::Result<(), (u
         .filter_map(|(n, node)| finish_node(node, t).err().map(|e| (n, e)))
         .min_by_key(|&(n, _)| n);
     first.map_or(Ok(()), Err)
+}
+
+/// Link `l`'s gathered values `(w, f)`; `(owner, ll)` its `link_home` (the node named
+/// for it, its local index there), `line` the nodes of its ends if it is a
+/// transmission line.
+fn link_values(
+    nodes: &[Node],
+    scenario: &Scenario,
+    (owner, ll): (usize, usize),
+    line: Option<(usize, usize)>,
+    l: usize,
+) -> (f64, f64) {
+    if let Some((na, nb)) = line {
+        // A line: its true length from both ends' anchors, the owner's tension.
+        let (pa, ta) = nodes[na].line_end(l).unwrap_or_default();
+        let (pb, tb) = nodes[nb].line_end(l).unwrap_or_default();
+        let w = (pa - pb).norm() - scenario.links[l].length;
+        return (w, if owner == na { ta } else { tb });
+    }
+    let node = &nodes[owner];
+    (
+        node.system.violations()[ll],
+        node.system.tension(&node.state, ll),
+    )
+}
+
+/// What is wrong with a link's gathered `w` and `f` at the divergence bound, if anything.
+fn link_fault(w: f64, f: f64, bound: f64) -> Option<String> {
+    if !w.is_finite() || !f.is_finite() {
+        Some(format!("non-finite w = {w} or f = {f}"))
+    } else if w.abs() > bound {
+        Some(format!("|w| = {} m exceeds the bound {bound} m", w.abs()))
+    } else {
+        None
+    }
+}
+
+/// Whether a body's gathered position and velocity are finite.
+fn body_finite(p: &Vector3<f64>, v: &Vector3<f64>) -> bool {
+    p.iter().chain(v.iter()).all(|x| x.is_finite())
 }
