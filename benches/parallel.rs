@@ -11,8 +11,10 @@
 //!
 //! - `grid64_16n_cg10`: 64×64 on 16 nodes of 16×16, CG 10 (tolerance 0), 100 lock-steps;
 //! - `grid32_16n_cg10`: 32×32 on 16 nodes of 8×8, CG 10, 1000 lock-steps;
-//! - `grid16_16n` / `grid16_4n`: 16×16 on 16 nodes of 4×4 / 4 nodes of 8×8, the default
-//!   exact solve, 1000 lock-steps;
+//! - `grid16_4n*` / `grid16_16n*`: 16×16 on 4 nodes of 8×8 / 16 nodes of 4×4, CG 10
+//!   (`_cg10`) or the default exact solve, 1000 lock-steps;
+//! - `grid12_4n_cg10` / `grid12_16n_cg10`: 12×12 on 4 nodes of 6×6 / 16 nodes of 3×3,
+//!   CG 10, 1000 lock-steps;
 //! - `grid8_16n`: 8×8 on 16 nodes of 2×2 (`tdma16`'s split, on ideal channels);
 //! - `thesis`: the shipped `grid16_space_fixed` (4×4 on the 4 thesis nodes), 1000
 //!   lock-steps.
@@ -34,11 +36,15 @@ use serde_json::{json, Value};
 const GROUP: &str = "parallel";
 
 /// Scene name, lock-steps per iteration.
-const SCENES: [(&str, u64); 6] = [
+const SCENES: [(&str, u64); 10] = [
     ("grid64_16n_cg10", 100),
     ("grid32_16n_cg10", 1000),
-    ("grid16_16n", 1000),
+    ("grid16_4n_cg10", 1000),
+    ("grid16_16n_cg10", 1000),
     ("grid16_4n", 1000),
+    ("grid16_16n", 1000),
+    ("grid12_4n_cg10", 1000),
+    ("grid12_16n_cg10", 1000),
     ("grid8_16n", 1000),
     ("thesis", 1000),
 ];
@@ -71,7 +77,11 @@ fn world(scene: &str, steps: u64) -> CoSim {
     match scene {
         "grid64_16n_cg10" => blocks(64, 4, cg10(), steps),
         "grid32_16n_cg10" => blocks(32, 4, cg10(), steps),
+        "grid16_4n_cg10" => blocks(16, 2, cg10(), steps),
+        "grid16_16n_cg10" => blocks(16, 4, cg10(), steps),
         "grid16_16n" => blocks(16, 4, None, steps),
+        "grid12_4n_cg10" => blocks(12, 2, cg10(), steps),
+        "grid12_16n_cg10" => blocks(12, 4, cg10(), steps),
         "grid16_4n" => blocks(16, 2, None, steps),
         "grid8_16n" => blocks(8, 4, None, steps),
         _ => {

@@ -187,9 +187,12 @@ pub struct CoSim {
 
 /// Links per lock-step (summed over the nodes' own systems, ghosts' links included) from
 /// which the nodes of a world with two or more nodes step in parallel when rayon has more
-/// than one thread. Below it a step is too short for rayon's fork and join to pay (the
-/// measurements that chose it: docs/performance.md, "Parallel lock-step").
-pub const PARALLEL_MIN_LINKS: usize = 1024;
+/// than one thread. Below it a step is too short for rayon's fork and join to pay: on
+/// this 2-core machine (`cargo bench --bench parallel`) the thesis scene (24 links)
+/// took 1.6–1.7× as long on two threads and an 8×8 grid on 16 nodes (112 links)
+/// 1.2×, while 16×16 grids (480 links) on 4 or 16 nodes gained up to 1.8× (one case at
+/// par); docs/performance.md, "Parallel lock-step".
+pub const PARALLEL_MIN_LINKS: usize = 480;
 
 fn parallel_min_links_default() -> usize {
     PARALLEL_MIN_LINKS
@@ -992,6 +995,7 @@ fn finish_parallel(nodes: &mut [Node], t: SimTime) -> std::result::Result<(), (u
 /// Link `l`'s gathered values `(w, f)`; `(owner, ll)` its `link_home` (the node named
 /// for it, its local index there), `line` the nodes of its ends if it is a
 /// transmission line.
+#[inline]
 fn link_values(
     nodes: &[Node],
     scenario: &Scenario,
