@@ -21,7 +21,9 @@
 //! Within a [`crate::kernel::EventClass`] at equal time events leave FIFO, so channels sample in
 //! channel order and messages arrive in the order they were sent. Nodes step in node
 //! order inside one `PartitionStep` event; they share nothing during a step, so the
-//! order cannot change a bit of the result.
+//! order cannot change a bit of the result, and from [`world::PARALLEL_MIN_LINKS`] links
+//! per lock-step they step in parallel on rayon's threads, every reduction (the first
+//! error, max |w|) done in node order after the parallel part.
 
 pub mod event;
 pub mod tdma;

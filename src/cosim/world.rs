@@ -3,12 +3,14 @@
 use std::sync::Arc;
 
 use nalgebra::Vector3;
+use rayon::prelude::*;
 
 use super::{Event, TdmaLink};
 use crate::control::CostMeter;
 use crate::error::{Divergence, Error, Place, Result};
 use crate::kernel::{EventClass, Kernel, SimTime};
 use crate::multibody::dynamics::EvalError;
+use crate::multibody::solver::BATCH;
 use crate::multibody::System;
 use crate::network::tdma::{tdma_node, CycleReport, TdmaError};
 use crate::network::{Channel, Message, Payload};
@@ -176,6 +178,24 @@ pub struct CoSim {
     messages: u64,
     events: u64,
     max_violation: f64,
+    /// Links per lock-step (over every node's system) from which the nodes step in
+    /// parallel on rayon ([`PARALLEL_MIN_LINKS`] unless set). Not part of the world's
+    /// state: a checkpoint does not store it, and it changes no bit of a run.
+    #[serde(skip, default = "parallel_min_links_default")]
+    parallel_min_links: usize,
+}
+
+/// Links per lock-step (summed over the nodes' own systems, ghosts' links included) from
+/// which the nodes of a world with two or more nodes step in parallel when rayon has more
+/// than one thread. Below it a step is too short for rayon's fork and join to pay: on
+/// this 2-core machine (`cargo bench --bench parallel`) the thesis scene (24 links)
+/// took 1.6–1.7× as long on two threads and an 8×8 grid on 16 nodes (112 links)
+/// 1.2×, while 16×16 grids (480 links) on 4 or 16 nodes gained up to 1.8× (one case at
+/// par); docs/performance.md, "Parallel lock-step".
+pub const PARALLEL_MIN_LINKS: usize = 480;
+
+fn parallel_min_links_default() -> usize {
+    PARALLEL_MIN_LINKS
 }
 
 impl CoSim {
@@ -263,7 +283,23 @@ impl CoSim {
             messages: 0,
             events: 0,
             max_violation: 0.0,
+            parallel_min_links: PARALLEL_MIN_LINKS,
         }
+    }
+
+    /// Steps the nodes in parallel from `links` links per lock-step on (0: whenever
+    /// there are two nodes and two rayon threads; `usize::MAX`: never). The result is
+    /// the same bits either way; benches and tests use it to compare the two paths.
+    pub fn set_parallel_min_links(&mut self, links: usize) {
+        self.parallel_min_links = links;
+    }
+
+    /// Whether the next lock-step runs its nodes in parallel: two nodes or more, at
+    /// least [`PARALLEL_MIN_LINKS`] (or the set threshold) links per lock-step, and more
+    /// than one thread in the current rayon pool.
+    pub fn steps_in_parallel(&self) -> bool {
+        let links: usize = self.nodes.iter().map(|n| n.system.link_count()).sum();
+        self.nodes.len() > 1 && links >= self.parallel_min_links && rayon::current_num_threads() > 1
     }
 
     /// The scenario being run.
@@ -688,15 +724,27 @@ impl CoSim {
     fn step(&mut self, t: SimTime, obs: &mut dyn Observer) -> Result<()> {
         let k = self.steps_done;
         let last = k == self.scenario.steps;
-        for node in &mut self.nodes {
-            node.prepare_step(t);
-        }
+        let parallel = self.steps_in_parallel();
         // The nodes share nothing during a step: their rate evaluations are batched
-        // (results and first error as if evaluated one after another in node order).
-        let nodes = self.nodes.iter_mut().map(|n| (&mut n.system, &n.state));
-        System::begin_steps(t, nodes).map_err(|(n, e)| self.eval_error(t, n, e))?;
-        self.gather();
-        self.check(t)?;
+        // (results and first error as if evaluated one after another in node order),
+        // on rayon when the step is large enough; each node's values are the same bits
+        // on any thread, and the first error is the lowest node's.
+        if parallel {
+            begin_parallel(&mut self.nodes, t)
+        } else {
+            for node in &mut self.nodes {
+                node.prepare_step(t);
+            }
+            let nodes = self.nodes.iter_mut().map(|n| (&mut n.system, &n.state));
+            System::begin_steps(t, nodes)
+        }
+        .map_err(|(n, e)| self.eval_error(t, n, e))?;
+        if parallel {
+            self.gather_check_parallel(t)?;
+        } else {
+            self.gather();
+            self.check(t)?;
+        }
         let values = StepValues {
             step: k,
             time: t,
@@ -713,12 +761,12 @@ impl CoSim {
             return Ok(());
         }
         self.meter.add(&self.w);
-        for n in 0..self.nodes.len() {
-            let node = &mut self.nodes[n];
-            node.system
-                .finish_step(t, &mut node.state)
-                .map_err(|e| self.eval_error(t, n, e))?;
-            self.nodes[n].restore_held_ghosts();
+        if parallel {
+            finish_parallel(&mut self.nodes, t).map_err(|(n, e)| self.eval_error(t, n, e))?;
+        } else {
+            for n in 0..self.nodes.len() {
+                finish_node(&mut self.nodes[n], t).map_err(|e| self.eval_error(t, n, e))?;
+            }
         }
         self.next_step = Some(SimTime(t.0 + self.scenario.dt.0));
         Ok(())
@@ -726,18 +774,14 @@ impl CoSim {
 
     /// Copies each link's and body's values from the node that owns it.
     fn gather(&mut self) {
-        for (l, &(n, ll)) in self.link_home.iter().enumerate() {
-            if let Some((na, nb)) = self.line_ends[l] {
-                // A line: its true length from both ends' anchors, the owner's tension.
-                let (pa, ta) = self.nodes[na].line_end(l).unwrap_or_default();
-                let (pb, tb) = self.nodes[nb].line_end(l).unwrap_or_default();
-                self.w[l] = (pa - pb).norm() - self.scenario.links[l].length;
-                self.f[l] = if n == na { ta } else { tb };
-                continue;
-            }
-            let node = &self.nodes[n];
-            self.w[l] = node.system.violations()[ll];
-            self.f[l] = node.system.tension(&node.state, ll);
+        for l in 0..self.w.len() {
+            (self.w[l], self.f[l]) = link_values(
+                &self.nodes,
+                &self.scenario,
+                self.link_home[l],
+                self.line_ends[l],
+                l,
+            );
         }
         for (b, &(n, lb)) in self.body_home.iter().enumerate() {
             self.p[b] = self.nodes[n].state.p[lb];
@@ -749,32 +793,103 @@ impl CoSim {
     fn check(&mut self, t: SimTime) -> Result<()> {
         let bound = self.scenario.max_violation;
         for (l, (&w, &f)) in self.w.iter().zip(&self.f).enumerate() {
-            let what = if !w.is_finite() || !f.is_finite() {
-                format!("non-finite w = {w} or f = {f}")
-            } else if w.abs() > bound {
-                format!("|w| = {} m exceeds the bound {bound} m", w.abs())
-            } else {
-                self.max_violation = self.max_violation.max(w.abs());
-                continue;
-            };
-            return Err(Error::Diverged(Divergence {
-                time: t,
-                node: self.link_home[l].0 + 1,
-                place: Place::Link(l + 1),
-                what,
-            }));
+            match link_fault(w, f, bound) {
+                None => self.max_violation = self.max_violation.max(w.abs()),
+                Some(what) => return Err(self.link_diverged(t, l, what)),
+            }
         }
         for (b, (p, v)) in self.p.iter().zip(&self.v).enumerate() {
-            if !(p.iter().chain(v.iter()).all(|x| x.is_finite())) {
-                return Err(Error::Diverged(Divergence {
-                    time: t,
-                    node: self.body_home[b].0 + 1,
-                    place: Place::Body(self.scenario.bodies[b].id),
-                    what: "non-finite position or velocity".into(),
-                }));
+            if !body_finite(p, v) {
+                return Err(self.body_diverged(t, b));
             }
         }
         Ok(())
+    }
+
+    /// [`gather`](Self::gather) and [`check`](Self::check) on rayon's threads, in chunks
+    /// of links and of bodies: the same copies, and the same reduction in link then
+    /// body order after the parallel part (the largest `|w|` of the links before the
+    /// first that fails, which is exact in any grouping, then that link's error, else
+    /// the first non-finite body's).
+    fn gather_check_parallel(&mut self, t: SimTime) -> Result<()> {
+        const CHUNK: usize = 512;
+        let bound = self.scenario.max_violation;
+        let (nodes, scenario) = (&self.nodes, &*self.scenario);
+        let (link_home, line_ends) = (&self.link_home, &self.line_ends);
+        let body_home = &self.body_home;
+        let (w, f, p, v) = (&mut self.w, &mut self.f, &mut self.p, &mut self.v);
+        let (links, bodies) = rayon::join(
+            || {
+                w.par_chunks_mut(CHUNK)
+                    .zip(f.par_chunks_mut(CHUNK))
+                    .enumerate()
+                    .map(|(c, (w, f))| {
+                        let (mut max, mut fault) = (0.0f64, None);
+                        for (i, (w, f)) in w.iter_mut().zip(f.iter_mut()).enumerate() {
+                            let l = c * CHUNK + i;
+                            (*w, *f) = link_values(nodes, scenario, link_home[l], line_ends[l], l);
+                            if fault.is_some() {
+                                continue;
+                            }
+                            match link_fault(*w, *f, bound) {
+                                None => max = max.max(w.abs()),
+                                Some(what) => fault = Some((l, what)),
+                            }
+                        }
+                        (max, fault)
+                    })
+                    .collect::<Vec<_>>()
+            },
+            || {
+                p.par_chunks_mut(CHUNK)
+                    .zip(v.par_chunks_mut(CHUNK))
+                    .enumerate()
+                    .map(|(c, (p, v))| {
+                        let mut fault = None;
+                        for (i, (p, v)) in p.iter_mut().zip(v.iter_mut()).enumerate() {
+                            let b = c * CHUNK + i;
+                            let (n, lb) = body_home[b];
+                            *p = nodes[n].state.p[lb];
+                            *v = nodes[n].state.v[lb];
+                            if fault.is_none() && !body_finite(p, v) {
+                                fault = Some(b);
+                            }
+                        }
+                        fault
+                    })
+                    .collect::<Vec<_>>()
+            },
+        );
+        for (max, fault) in links {
+            self.max_violation = self.max_violation.max(max);
+            if let Some((l, what)) = fault {
+                return Err(self.link_diverged(t, l, what));
+            }
+        }
+        match bodies.into_iter().flatten().next() {
+            Some(b) => Err(self.body_diverged(t, b)),
+            None => Ok(()),
+        }
+    }
+
+    /// Link `l` diverged at `t`: `what`.
+    fn link_diverged(&self, t: SimTime, l: usize, what: String) -> Error {
+        Error::Diverged(Divergence {
+            time: t,
+            node: self.link_home[l].0 + 1,
+            place: Place::Link(l + 1),
+            what,
+        })
+    }
+
+    /// Body `b`'s position or velocity is not finite at `t`.
+    fn body_diverged(&self, t: SimTime, b: usize) -> Error {
+        Error::Diverged(Divergence {
+            time: t,
+            node: self.body_home[b].0 + 1,
+            place: Place::Body(self.scenario.bodies[b].id),
+            what: "non-finite position or velocity".into(),
+        })
     }
 
     fn eval_error(&self, t: SimTime, node: usize, e: EvalError) -> Error {
@@ -823,4 +938,97 @@ impl CoSim {
             },
         }
     }
+}
+
+/// The second half of node `node`'s step at `t` (the first error stops it where the
+/// serial lock-step stops).
+fn finish_node(node: &mut Node, t: SimTime) -> std::result::Result<(), EvalError> {
+    node.system.finish_step(t, &mut node.state)?;
+    node.restore_held_ghosts();
+    Ok(())
+}
+
+/// Each node's border loads and rates at `t`, the nodes spread over rayon's threads;
+/// the error of the lowest node that fails, as the serial lock-step reports it.
+///
+/// Nodes with the dense exact solve go in chunks of [`BATCH`] (their solves interleave
+/// as in [`System::begin_steps`]), any other node on its own. Every node is prepared
+/// and evaluated, and the errors are reduced to the lowest node's, whatever thread
+/// finished first. Unlike the serial loop, nodes after a failing one have been
+/// evaluated too, which nothing reads: the run stops with that error, and an
+/// evaluation touches only the node's system (its workspace), not its state or its
+/// port accounts; every node is prepared, as in the serial lock-step.
+fn begin_parallel(nodes: &mut [Node], t: SimTime) -> std::result::Result<(), (usize, EvalError)> {
+    let chunk = if nodes.iter().all(|n| n.system.solver.is_dense()) {
+        BATCH
+    } else {
+        1
+    };
+    let first = nodes
+        .par_chunks_mut(chunk)
+        .enumerate()
+        .filter_map(|(c, group)| {
+            for node in group.iter_mut() {
+                node.prepare_step(t);
+            }
+            let systems = group.iter_mut().map(|n| (&mut n.system, &n.state));
+            System::begin_steps(t, systems)
+                .err()
+                .map(|(i, e)| (c * chunk + i, e))
+        })
+        .min_by_key(|&(n, _)| n);
+    first.map_or(Ok(()), Err)
+}
+
+/// [`finish_node`] of every node, spread over rayon's threads; the lowest failing
+/// node's error (the run stops with it: the states of the nodes after it, stepped here
+/// and not in the serial loop, are not read).
+fn finish_parallel(nodes: &mut [Node], t: SimTime) -> std::result::Result<(), (usize, EvalError)> {
+    let first = nodes
+        .par_iter_mut()
+        .enumerate()
+        .filter_map(|(n, node)| finish_node(node, t).err().map(|e| (n, e)))
+        .min_by_key(|&(n, _)| n);
+    first.map_or(Ok(()), Err)
+}
+
+/// Link `l`'s gathered values `(w, f)`; `(owner, ll)` its `link_home` (the node named
+/// for it, its local index there), `line` the nodes of its ends if it is a
+/// transmission line.
+#[inline]
+fn link_values(
+    nodes: &[Node],
+    scenario: &Scenario,
+    (owner, ll): (usize, usize),
+    line: Option<(usize, usize)>,
+    l: usize,
+) -> (f64, f64) {
+    if let Some((na, nb)) = line {
+        // A line: its true length from both ends' anchors, the owner's tension.
+        let (pa, ta) = nodes[na].line_end(l).unwrap_or_default();
+        let (pb, tb) = nodes[nb].line_end(l).unwrap_or_default();
+        let w = (pa - pb).norm() - scenario.links[l].length;
+        return (w, if owner == na { ta } else { tb });
+    }
+    let node = &nodes[owner];
+    (
+        node.system.violations()[ll],
+        node.system.tension(&node.state, ll),
+    )
+}
+
+/// What is wrong with a link's gathered `w` and `f` at the divergence bound, if anything.
+fn link_fault(w: f64, f: f64, bound: f64) -> Option<String> {
+    if !w.is_finite() || !f.is_finite() {
+        Some(format!("non-finite w = {w} or f = {f}"))
+    } else if w.abs() > bound {
+        Some(format!("|w| = {} m exceeds the bound {bound} m", w.abs()))
+    } else {
+        None
+    }
+}
+
+/// Whether a body's gathered position and velocity are finite.
+fn body_finite(p: &Vector3<f64>, v: &Vector3<f64>) -> bool {
+    p.iter().chain(v.iter()).all(|x| x.is_finite())
 }
