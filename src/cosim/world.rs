@@ -161,8 +161,8 @@ pub struct CoSim {
     epochs: Vec<EpochRecord>,
     /// (node, local index) holding each link's values (not for lines).
     link_home: Vec<(usize, usize)>,
-    /// Per link that is a transmission line: the nodes of its ends `a` and `b`.
-    line_ends: Vec<Option<(usize, usize)>>,
+    /// Per link that is a transmission line: (node, end index) of its ends `a` and `b`.
+    line_ends: Vec<Option<[(usize, usize); 2]>>,
     /// (node, local index) of each body's owner copy.
     body_home: Vec<(usize, usize)>,
     w: Vec<f64>,
@@ -208,12 +208,15 @@ impl CoSim {
             .collect();
         let (channels, tdma) =
             network_of(scenario, &layout).expect("ok: validation built this network once already");
+        // Each line's two ends, found once: (node, end index) at `a` and at `b`.
         let line_ends = (0..scenario.links.len())
             .map(|l| {
                 let link = &scenario.links[l];
-                lines
-                    .is_line(l)
-                    .then(|| (layout.node_of[link.a], layout.node_of[link.b]))
+                let end = |body: usize| {
+                    let n = layout.node_of[body];
+                    nodes[n].line_index(l).map(|k| (n, k))
+                };
+                Some([end(link.a)?, end(link.b)?])
             })
             .collect();
         // A line's values are gathered from both its ends; its owner is named for it.
@@ -633,7 +636,7 @@ impl CoSim {
                 }
                 payload
             }
-            (DataKind::Force, Some(l)) if from.has_line(l) => {
+            (DataKind::Force, Some(l)) if from.line_index(l).is_some() => {
                 Payload::Line(from.line_sample(t, l)?)
             }
             (DataKind::Force, Some(l)) => from.force_payload(l, route.body),
@@ -993,20 +996,20 @@ fn finish_parallel(nodes: &mut [Node], t: SimTime) -> std::result::Result<(), (u
 }
 
 /// Link `l`'s gathered values `(w, f)`; `(owner, ll)` its `link_home` (the node named
-/// for it, its local index there), `line` the nodes of its ends if it is a
+/// for it, its local index there), `line` its ends (node, end index) if it is a
 /// transmission line.
 #[inline]
 fn link_values(
     nodes: &[Node],
     scenario: &Scenario,
     (owner, ll): (usize, usize),
-    line: Option<(usize, usize)>,
+    line: Option<[(usize, usize); 2]>,
     l: usize,
 ) -> (f64, f64) {
-    if let Some((na, nb)) = line {
+    if let Some([(na, ka), (nb, kb)]) = line {
         // A line: its true length from both ends' anchors, the owner's tension.
-        let (pa, ta) = nodes[na].line_end(l).unwrap_or_default();
-        let (pb, tb) = nodes[nb].line_end(l).unwrap_or_default();
+        let (pa, ta) = nodes[na].line_end(ka);
+        let (pb, tb) = nodes[nb].line_end(kb);
         let w = (pa - pb).norm() - scenario.links[l].length;
         return (w, if owner == na { ta } else { tb });
     }

@@ -170,7 +170,7 @@ pub struct LineEnd {
     /// Impedance `Z` [N·s/m].
     pub impedance: f64,
     /// One-way delay `T` [s].
-    pub delay: f64,
+    delay: f64,
     /// The incoming wave after the low-pass filter [N].
     filtered: f64,
     far: FarEnd,
@@ -195,8 +195,8 @@ pub struct LineEnd {
 
 impl LineEnd {
     /// The end at local body `body` of link `link`, with the far anchor's initial
-    /// position and velocity, and the link's initial extension `w0` [m] under
-    /// `stiffness` [N/m] (the held initial wave).
+    /// position and velocity, the line's impedance `Z` and one-way delay `T` [s], and
+    /// the initial wave `c₀ = stiffness · w₀` held until the first wave arrives.
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         link: usize,
@@ -204,7 +204,7 @@ impl LineEnd {
         anchor: Vector3<f64>,
         far: (usize, usize, Vector3<f64>, Vector3<f64>),
         owner_side: bool,
-        impedance: f64,
+        (impedance, delay): (f64, f64),
         initial_wave: f64,
     ) -> LineEnd {
         let (far_body, far_node, p, v) = far;
@@ -216,7 +216,7 @@ impl LineEnd {
             far_node,
             owner_side,
             impedance,
-            delay: 0.0,
+            delay,
             filtered: initial_wave,
             far: FarEnd {
                 p,
@@ -339,7 +339,7 @@ mod tests {
             Vector3::zeros(),
             (1, 1, Vector3::new(1.0, 0.0, 0.0), Vector3::zeros()),
             true,
-            z,
+            (z, z / 400.0),
             c0,
         )
     }

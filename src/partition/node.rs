@@ -594,17 +594,15 @@ fn line_ends(
             };
             let (p, v) = anchor_at(far, &far_anchor);
             let far_node = layout.node_of[far];
-            let mut end = LineEnd::new(
+            ends.push(LineEnd::new(
                 l,
                 local,
                 anchor,
                 (far, far_node, p, v),
                 layout.link_owner[l] == index,
-                z,
+                (z, z / rule.stiffness),
                 initial_wave,
-            );
-            end.delay = z / rule.stiffness;
-            ends.push(end);
+            ));
         }
     }
     ends

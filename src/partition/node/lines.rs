@@ -43,15 +43,15 @@ impl Node {
         }
     }
 
-    /// Whether global link `l` is a line with an end on this node.
-    pub fn has_line(&self, l: usize) -> bool {
-        self.lines.iter().any(|e| e.link == l)
+    /// Index of this node's end of line `l` (global link), if it holds one.
+    pub fn line_index(&self, l: usize) -> Option<usize> {
+        self.lines.iter().position(|e| e.link == l)
     }
 
     /// The sample of this node's end of line `l` at `t` (the link owner's end, sent on
     /// the link's force route); starts the end's next window.
     pub fn line_sample(&mut self, t: SimTime, l: usize) -> Option<LineSample> {
-        let k = self.lines.iter().position(|e| e.link == l)?;
+        let k = self.line_index(l)?;
         let [p, v, _] = self.anchor(self.lines[k].body, &self.lines[k].anchor);
         Some(self.lines[k].sample(t, p, v))
     }
@@ -81,10 +81,11 @@ impl Node {
         }
     }
 
-    /// This node's end of line `l`: its anchor's world position and its tension [N].
-    pub fn line_end(&self, l: usize) -> Option<(Vector3<f64>, f64)> {
-        let e = self.lines.iter().find(|e| e.link == l)?;
-        Some((self.anchor(e.body, &e.anchor)[0], e.tension))
+    /// This node's line end `k` (see [`Node::line_index`]): its anchor's world
+    /// position and its tension [N].
+    pub fn line_end(&self, k: usize) -> (Vector3<f64>, f64) {
+        let e = &self.lines[k];
+        (self.anchor(e.body, &e.anchor)[0], e.tension)
     }
 
     /// The most energy the lines' initial waves can give this node's bodies [J], at

@@ -129,16 +129,19 @@ fn coupling(c: &CouplingFile) -> Result<Coupling> {
         &[Passive],
         "only the \"passive\" scheme chooses its lines by age (\"tlm\" makes every border link a line)",
     )?;
-    let secs = spec.extrapolate.unwrap_or(DEFAULT_EXTRAPOLATE);
-    let extrapolate = match SimTime::from_secs_f64(secs) {
-        Some(t) if (0.0..=10.0).contains(&secs) => t,
-        _ => {
-            return Err(Error::invalid(
-                "partition.coupling.extrapolate",
-                format!("must be a time between 0 and 10 s, got {secs}"),
-            ))
-        }
+    // A time in [0, max] s.
+    let time = |field: &str, secs: f64, max: f64| match SimTime::from_secs_f64(secs) {
+        Some(t) if (0.0..=max).contains(&secs) => Ok(t),
+        _ => Err(Error::invalid(
+            format!("partition.coupling.{field}"),
+            format!("must be a time between 0 and {max} s, got {secs}"),
+        )),
     };
+    let extrapolate = time(
+        "extrapolate",
+        spec.extrapolate.unwrap_or(DEFAULT_EXTRAPOLATE),
+        10.0,
+    )?;
     let stiffness = spec.stiffness.unwrap_or(DEFAULT_STIFFNESS);
     if !(stiffness.is_finite() && stiffness > 0.0) {
         return Err(Error::invalid(
@@ -146,16 +149,11 @@ fn coupling(c: &CouplingFile) -> Result<Coupling> {
             format!("must be a finite stiffness > 0 N/m, got {stiffness}"),
         ));
     }
-    let above_secs = spec.lines_above.unwrap_or(DEFAULT_LINES_ABOVE);
-    let above = match SimTime::from_secs_f64(above_secs) {
-        Some(t) if (0.0..=1000.0).contains(&above_secs) => t,
-        _ => {
-            return Err(Error::invalid(
-                "partition.coupling.lines_above",
-                format!("must be a time between 0 and 1000 s, got {above_secs}"),
-            ))
-        }
-    };
+    let above = time(
+        "lines_above",
+        spec.lines_above.unwrap_or(DEFAULT_LINES_ABOVE),
+        1000.0,
+    )?;
     match name {
         CouplingName::Reset => Ok(Coupling::Reset),
         Predict => Ok(Coupling::Predict { extrapolate }),
