@@ -6,35 +6,17 @@
 //! busy; timed steps then continue the trajectory (so CG's warm start is as good as in
 //! a real run, no better), restarting from that state every 1000 steps.
 
+mod common;
+
 use std::time::{Duration, Instant};
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use dsmcosim::kernel::SimTime;
 use dsmcosim::multibody::{State, System};
-use dsmcosim::scenario::parse_str;
 use serde_json::{json, Value};
 
 fn grid(n: usize, solver: Value, body_model: &str) -> (System, State, SimTime) {
-    let s = parse_str(
-        &json!({
-            "name": "bench", "seed": 1, "duration": 1.0, "dt": 0.001,
-            "model": {"grid": {"rows": n, "cols": n, "spacing": 1.8, "mass": 1.0, "size": 0.2}},
-            "forces": [{"body": 1, "amplitude": [0, 0, 20], "omega": 2.0, "phase": 1.0}],
-            "solver": solver,
-            "body_model": body_model
-        })
-        .to_string(),
-        "bench",
-    )
-    .expect("valid bench scenario");
-    let mut system = System::new(&s);
-    let mut state = State::initial(&s);
-    let mut t = SimTime::ZERO;
-    for _ in 0..200 {
-        system.step(t, &mut state).expect("warm-up step");
-        t = SimTime(t.0 + s.dt.0);
-    }
-    (system, state, t)
+    common::warm_grid(n, solver, body_model, 200)
 }
 
 /// Mean CG iterations per step over `steps` steps from the given point.

@@ -279,7 +279,6 @@ pub(crate) fn stabilizer_json(scenario: &Scenario) -> Value {
 pub(crate) fn solver_json(scenario: &Scenario) -> Value {
     match scenario.solver {
         Solver::Cholesky => json!({"kind": "cholesky"}),
-        Solver::OrderedCholesky => json!({"kind": "cholesky_amd"}),
         Solver::ConjugateGradient {
             max_iterations,
             tolerance,

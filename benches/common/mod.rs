@@ -6,7 +6,9 @@ use std::time::SystemTime;
 use criterion::{BatchSize, Criterion, Throughput};
 use dsmcosim::cosim::CoSim;
 use dsmcosim::kernel::SimTime;
-use serde_json::Value;
+use dsmcosim::multibody::{State, System};
+use dsmcosim::scenario::parse_str;
+use serde_json::{json, Value};
 
 /// Median time [ns] criterion recorded for `group/case` since `since`, if it ran in
 /// this run (an older estimate on disk is ignored).
@@ -82,4 +84,32 @@ pub fn shipped_one_second(name: &str) -> Value {
         serde_json::from_str(&std::fs::read_to_string(p).expect("scenario")).expect("json");
     v["duration"] = serde_json::json!(1.0);
     v
+}
+
+/// A monolithic `n`×`n` grid (spacing 1.8 m, 1 kg bodies of 0.2 m, body 1 driven by a
+/// 20 N sinusoid, dt 1 ms) with `solver` and `body_model`, stepped `warm` steps so the
+/// multipliers are busy and CG's warm start is as good as in a real run: the system,
+/// its state and the time reached.
+#[allow(dead_code)] // not every bench that shares this module steps grids
+pub fn warm_grid(n: usize, solver: Value, body_model: &str, warm: u64) -> (System, State, SimTime) {
+    let s = parse_str(
+        &json!({
+            "name": "bench", "seed": 1, "duration": 1.0, "dt": 0.001,
+            "model": {"grid": {"rows": n, "cols": n, "spacing": 1.8, "mass": 1.0, "size": 0.2}},
+            "forces": [{"body": 1, "amplitude": [0, 0, 20], "omega": 2.0, "phase": 1.0}],
+            "solver": solver,
+            "body_model": body_model
+        })
+        .to_string(),
+        "bench",
+    )
+    .expect("valid bench scenario");
+    let mut system = System::new(&s);
+    let mut state = State::initial(&s);
+    let mut t = SimTime::ZERO;
+    for _ in 0..warm {
+        system.step(t, &mut state).expect("warm-up step");
+        t = SimTime(t.0 + s.dt.0);
+    }
+    (system, state, t)
 }

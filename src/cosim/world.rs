@@ -926,7 +926,7 @@ impl CoSim {
                      residual that alone holds a link off by {residual:.3e} m (SMC: ε μ²‖r‖∞/K; \
                      worst {worst:.3e} m), and link L{} now has |w| = {violation:.3e} m, \
                      beyond divergence.max_violation = {bound} m; raise solver.max_iterations or \
-                     use \"solver\": {{\"kind\": \"cholesky_amd\"}}",
+                     use \"solver\": {{\"kind\": \"cholesky\"}}",
                     node + 1,
                     self.nodes[node].links[link] + 1
                 ),

@@ -1,10 +1,11 @@
 //! The multiplier system `A x = b` with `A = J M⁻¹ Jᵀ` (m × m, one row per link).
 //!
-//! `A` is never formed densely. Its entry `(k, l)` is non-zero only when links `k` and
-//! `l` share a body, so:
-//! - the exact path assembles `A` in compressed-column form on a sparsity pattern
-//!   computed once per run and re-factorizes it with a sparse Cholesky
-//!   (`nalgebra-sparse`, symbolic analysis reused via `refactor`);
+//! Entry `(k, l)` of `A` is non-zero only when links `k` and `l` share a body, so:
+//! - the exact path assembles `A`'s lower triangle on a pattern computed once per run.
+//!   Systems of at most [`DENSE_MAX_LINKS`] links factorize it densely in place (a node
+//!   of a partitioned run); larger ones with faer's sparse Cholesky in an
+//!   approximate-minimum-degree order, analysed once per run and factorized every solve
+//!   (`solver::ordered`);
 //! - the iterative path (`solver::cg`) assembles `A` in compressed-row form on a pattern
 //!   computed once per run and runs a Jacobi-preconditioned conjugate gradient
 //!   warm-started from the previous solution, with a fixed iteration budget.
@@ -18,10 +19,7 @@ mod ordered;
 
 use std::collections::BTreeMap;
 
-use nalgebra::{DVector, Matrix3, Vector3};
-use nalgebra_sparse::factorization::CscCholesky;
-use nalgebra_sparse::pattern::SparsityPattern;
-use nalgebra_sparse::CscMatrix;
+use nalgebra::{Matrix3, Vector3};
 
 use crate::scenario::model::Solver;
 
@@ -96,23 +94,21 @@ enum Side {
     B,
 }
 
-/// Exact sparse Cholesky state.
+/// Exact Cholesky state.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 struct Exact {
-    pattern: SparsityPattern,
+    /// Column offsets of `A`'s lower triangle in compressed-column form (rows sorted
+    /// within a column, so each column's diagonal entry is its first).
+    col_ptr: Vec<usize>,
+    /// Row indices of the lower triangle.
+    row_idx: Vec<usize>,
     entries: Vec<Entry>,
+    /// Values of the lower triangle, in `row_idx`'s order (the sparse path).
     values: Vec<f64>,
-    /// The numeric factorization; rebuilt from the pattern after a checkpoint restore
-    /// (the same elimination, so the same bits).
-    #[serde(skip)]
-    factor: Option<CscCholesky<f64>>,
-    rhs: DVector<f64>,
     /// Dense row-major `m × m` storage, used instead of the sparse factorization for
     /// small systems (a node of a partitioned run), where the sparse bookkeeping costs
     /// more than the arithmetic.
     dense: Option<Vec<f64>>,
-    /// `cholesky_amd`: factorize in an AMD order (faer) instead of the link order.
-    amd: bool,
     /// The ordered factorization, analysed on first use (again after a checkpoint
     /// restore: the same AMD order, so the same bits).
     #[serde(skip)]
@@ -121,6 +117,15 @@ struct Exact {
 
 /// Systems with at most this many links use the dense in-place Cholesky.
 pub const DENSE_MAX_LINKS: usize = 32;
+
+/// Which factorization an exact solve uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ExactPath {
+    /// Dense in place, with the forward substitution inside the factorization.
+    Dense,
+    /// faer's supernodal sparse Cholesky in an AMD order.
+    Ordered,
+}
 
 /// The `J M⁻¹ Jᵀ` solver of a run, with its scratch memory.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
@@ -137,8 +142,10 @@ impl JsSolver {
     /// Prepares a solver for `bodies` bodies and links with the given ends.
     pub fn new(kind: Solver, bodies: usize, ends: &[(usize, usize)]) -> JsSolver {
         let (exact, cg) = match kind {
-            Solver::Cholesky => (Some(Exact::new(bodies, ends, false)), None),
-            Solver::OrderedCholesky => (Some(Exact::new(bodies, ends, true)), None),
+            Solver::Cholesky => (
+                Some(Exact::new(bodies, ends, ends.len() <= DENSE_MAX_LINKS)),
+                None,
+            ),
             Solver::ConjugateGradient {
                 max_iterations,
                 tolerance,
@@ -150,6 +157,18 @@ impl JsSolver {
         JsSolver {
             exact,
             cg,
+            f: vec![Vector3::zeros(); bodies],
+            t: vec![Vector3::zeros(); bodies],
+        }
+    }
+
+    /// The exact solver on the factorization `path`, whatever the system's size (the
+    /// crossover bench times both on the same systems; a run chooses by
+    /// [`DENSE_MAX_LINKS`]).
+    pub fn exact(path: ExactPath, bodies: usize, ends: &[(usize, usize)]) -> JsSolver {
+        JsSolver {
+            exact: Some(Exact::new(bodies, ends, path == ExactPath::Dense)),
+            cg: None,
             f: vec![Vector3::zeros(); bodies],
             t: vec![Vector3::zeros(); bodies],
         }
@@ -239,55 +258,20 @@ impl JsSolver {
 const SINGULAR_PIVOT: f64 = 1e-13;
 
 impl Exact {
-    /// Largest diagonal entry of the assembled `A`.
-    fn max_diagonal(&self) -> f64 {
-        let (offsets, rows) = (self.pattern.major_offsets(), self.pattern.minor_indices());
-        (0..offsets.len() - 1)
-            .flat_map(|c| (offsets[c]..offsets[c + 1]).filter(move |&i| rows[i] == c))
-            .map(|i| self.values[i])
-            .fold(0.0, f64::max)
-    }
-
-    fn new(bodies: usize, ends: &[(usize, usize)], amd: bool) -> Exact {
+    /// Prepares the exact solve of the links `ends` between `bodies` bodies: the dense
+    /// in-place factorization when `dense`, else the ordered sparse one.
+    fn new(bodies: usize, ends: &[(usize, usize)], dense: bool) -> Exact {
         let m = ends.len();
-        // Links incident to each body, in link order (deterministic).
-        let mut incident: Vec<Vec<(usize, Side)>> = vec![Vec::new(); bodies];
-        for (k, &(a, b)) in ends.iter().enumerate() {
-            incident[a].push((k, Side::A));
-            incident[b].push((k, Side::B));
-        }
-        // Pattern: (col, row) pairs, ordered for CSC.
-        let mut slots: BTreeMap<(usize, usize), usize> = BTreeMap::new();
-        for inc in &incident {
-            for &(k, _) in inc {
-                for &(l, _) in inc {
-                    slots.insert((l, k), 0);
-                }
-            }
-        }
-        let mut offsets = vec![0usize; m + 1];
-        let mut indices = Vec::with_capacity(slots.len());
-        for (i, ((col, row), slot)) in slots.iter_mut().enumerate() {
-            *slot = i;
-            offsets[col + 1] = i + 1;
-            indices.push(*row);
-        }
-        for c in 1..=m {
-            offsets[c] = offsets[c].max(offsets[c - 1]);
-        }
-        let n_values = indices.len();
-        // Construction cannot fail: offsets are monotone and rows sorted within a column.
-        let pattern = SparsityPattern::try_from_offsets_and_indices(m, m, offsets, indices)
-            .expect("ok: pattern built sorted and in range");
-        let dense = m <= DENSE_MAX_LINKS;
+        let incident = incident_links(bodies, ends);
+        let (col_ptr, row_idx, slots) = lower_pattern(m, &incident);
         let mut entries = Vec::new();
         for (body, inc) in incident.iter().enumerate() {
             for &(k, sk) in inc {
                 for &(l, sl) in inc {
-                    // The dense factorization reads only the lower triangle (row k ≥
-                    // column l); the other entries would be computed for nothing. Each
-                    // kept entry still receives its contributions in the same order.
-                    if dense && k < l {
+                    // Both factorizations read only the lower triangle (row k ≥ column
+                    // l); the other entries would be computed for nothing. Each kept
+                    // entry still receives its contributions in body order.
+                    if k < l {
                         continue;
                     }
                     let sign = if sk == sl { 1.0 } else { -1.0 };
@@ -304,13 +288,15 @@ impl Exact {
             }
         }
         Exact {
-            pattern,
+            values: if dense {
+                Vec::new()
+            } else {
+                vec![0.0; row_idx.len()]
+            },
+            col_ptr,
+            row_idx,
             entries,
-            values: vec![0.0; n_values],
-            factor: None,
-            rhs: DVector::zeros(m),
             dense: dense.then(|| vec![0.0; m * m]),
-            amd,
             ordered: ordered::Slot::default(),
         }
     }
@@ -344,66 +330,89 @@ impl Exact {
         if let Some(a) = &mut self.dense {
             return dense_cholesky_solve(a, b, x);
         }
-        if self.amd {
-            let (offsets, rows) = (self.pattern.major_offsets(), self.pattern.minor_indices());
-            let n = offsets.len() - 1;
-            if self.ordered.0.is_none() {
-                self.ordered.0 = ordered::Ordered::new(n, offsets, rows);
-            }
-            let Some(o) = &mut self.ordered.0 else {
-                return Err(SolveError::NotPositiveDefinite);
-            };
-            return if o.solve(n, offsets, rows, &self.values, b, x) {
-                Ok(())
-            } else {
-                Err(SolveError::NotPositiveDefinite)
-            };
+        let n = self.col_ptr.len() - 1;
+        if self.ordered.0.is_none() {
+            self.ordered.0 = ordered::Ordered::new(n, &self.col_ptr, &self.row_idx);
         }
-        let refactored = match &mut self.factor {
-            Some(f) => f.refactor(&self.values).is_ok(),
-            None => {
-                let matrix = CscMatrix::try_from_pattern_and_values(
-                    self.pattern.clone(),
-                    self.values.clone(),
-                )
-                .expect("ok: values match the pattern");
-                match CscCholesky::factor(&matrix) {
-                    Ok(f) => {
-                        self.factor = Some(f);
-                        true
-                    }
-                    Err(_) => false,
-                }
-            }
-        };
-        if !refactored {
-            // A failed numeric refactor leaves the factor unusable; rebuild next time.
-            self.factor = None;
-            return Err(SolveError::NotPositiveDefinite);
-        }
-        let Some(factor) = &self.factor else {
+        let Some(o) = &mut self.ordered.0 else {
             return Err(SolveError::NotPositiveDefinite);
         };
-        // A pivot that is round-off relative to the largest diagonal entry means A is
-        // singular to working precision (e.g. two links doing the same job): report it
-        // instead of returning a solution scaled by 1/round-off.
-        let l = factor.l();
-        let (offsets, values) = (l.col_offsets(), l.values());
-        let min_pivot_sq = (0..l.ncols())
-            .map(|c| values[offsets[c]] * values[offsets[c]])
-            .fold(f64::INFINITY, f64::min);
-        if min_pivot_sq.is_nan() || min_pivot_sq <= SINGULAR_PIVOT * self.max_diagonal() {
-            return Err(SolveError::NotPositiveDefinite);
-        }
-        self.rhs.as_mut_slice().copy_from_slice(b);
-        factor.solve_mut(&mut self.rhs);
-        x.copy_from_slice(self.rhs.as_slice());
-        if x.iter().all(|v| v.is_finite()) {
+        // The diagonal entry is each column's first.
+        let max_diag = self.col_ptr[..n]
+            .iter()
+            .map(|&i| self.values[i])
+            .fold(0.0, f64::max);
+        if o.solve(
+            n,
+            &self.col_ptr,
+            &self.row_idx,
+            &self.values,
+            SINGULAR_PIVOT * max_diag,
+            b,
+            x,
+        ) {
             Ok(())
         } else {
             Err(SolveError::NotPositiveDefinite)
         }
     }
+}
+
+/// The links incident to each body, in link order (deterministic), with the side of
+/// the link the body is on.
+fn incident_links(bodies: usize, ends: &[(usize, usize)]) -> Vec<Vec<(usize, Side)>> {
+    let mut incident: Vec<Vec<(usize, Side)>> = vec![Vec::new(); bodies];
+    for (k, &(a, b)) in ends.iter().enumerate() {
+        incident[a].push((k, Side::A));
+        incident[b].push((k, Side::B));
+    }
+    incident
+}
+
+/// A lower-triangle pattern in compressed-column form, `(col_ptr, row_idx)`, with each
+/// entry's position keyed by `(column, row)`.
+type LowerPattern = (Vec<usize>, Vec<usize>, BTreeMap<(usize, usize), usize>);
+
+/// The lower triangle of `A`'s pattern (entry `(k, l)`, `k ≥ l`, wherever links `k` and
+/// `l` share a body) in compressed-column form with sorted rows, and each entry's
+/// position keyed by `(column, row)`.
+fn lower_pattern(
+    m: usize,
+    incident: &[Vec<(usize, Side)>],
+) -> LowerPattern {
+    let mut slots: BTreeMap<(usize, usize), usize> = BTreeMap::new();
+    for inc in incident {
+        for &(k, _) in inc {
+            for &(l, _) in inc {
+                if k >= l {
+                    slots.insert((l, k), 0);
+                }
+            }
+        }
+    }
+    let mut col_ptr = vec![0usize; m + 1];
+    let mut row_idx = Vec::with_capacity(slots.len());
+    for (i, ((col, row), slot)) in slots.iter_mut().enumerate() {
+        *slot = i;
+        col_ptr[col + 1] = i + 1;
+        row_idx.push(*row);
+    }
+    for c in 1..=m {
+        col_ptr[c] = col_ptr[c].max(col_ptr[c - 1]);
+    }
+    (col_ptr, row_idx, slots)
+}
+
+/// Entries of the exact solve's factor for links `ends` between `bodies` bodies: `m²`
+/// on the dense path, else the length of the ordered sparse factor from its symbolic
+/// analysis (what a run allocates for it). `None` if the analysis is refused.
+pub fn exact_factor_entries(bodies: usize, ends: &[(usize, usize)]) -> Option<u64> {
+    let m = ends.len();
+    if m <= DENSE_MAX_LINKS {
+        return Some((m * m) as u64);
+    }
+    let (col_ptr, row_idx, _) = lower_pattern(m, &incident_links(bodies, ends));
+    ordered::factor_entries(m, &col_ptr, &row_idx)
 }
 
 /// Solves `A x = b` for symmetric positive definite `A` (row-major, `m × m`, only the
@@ -539,7 +548,7 @@ fn finite(x: &[f64]) -> Result<(), SolveError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use nalgebra::DMatrix;
+    use nalgebra::{DMatrix, DVector};
 
     /// A small rigid scene with shared bodies and off-centre anchors.
     fn scene() -> (Geometry, MassData) {
@@ -724,19 +733,49 @@ mod tests {
 
     #[test]
     fn exact_solve_reports_a_singular_system() {
-        // Two identical links between the same bodies: A is singular.
-        let geo = Geometry {
-            ends: vec![(0, 1), (0, 1)],
-            n: vec![Vector3::x(), Vector3::x()],
-            ca: vec![],
-            cb: vec![],
+        // Two identical links between the same bodies: A is singular. Exactly singular
+        // (a zero pivot) and singular to round-off (a pivot of 1e-16 of the diagonal)
+        // are both reported, on both factorizations.
+        for tilt in [0.0, 1e-8] {
+            let geo = Geometry {
+                ends: vec![(0, 1), (0, 1), (1, 2)],
+                n: vec![
+                    Vector3::x(),
+                    Vector3::new(1.0, tilt, 0.0).normalize(),
+                    Vector3::y(),
+                ],
+                ca: vec![],
+                cb: vec![],
+            };
+            let mass = MassData {
+                inv_mass: vec![1.0, 1.0, 1.0],
+                inv_inertia: vec![],
+            };
+            for path in [ExactPath::Dense, ExactPath::Ordered] {
+                let mut s = JsSolver::exact(path, 3, &geo.ends);
+                let mut x = [0.0; 3];
+                let r = s.solve(&geo, &mass, &[1.0, 0.0, 0.5], &mut x);
+                assert!(r.is_err(), "{path:?}, tilt {tilt}: {x:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn both_exact_factorizations_agree_on_a_rigid_scene() {
+        let (geo, mass) = scene();
+        let b = [1.0, -2.0, 0.5, 0.25];
+        let solve = |path| {
+            let mut s = JsSolver::exact(path, 4, &geo.ends);
+            let mut x = [0.0; 4];
+            s.solve(&geo, &mass, &b, &mut x).unwrap();
+            x
         };
-        let mass = MassData {
-            inv_mass: vec![1.0, 1.0],
-            inv_inertia: vec![],
-        };
-        let mut s = JsSolver::new(Solver::Cholesky, 2, &geo.ends);
-        let mut x = [0.0; 2];
-        assert!(s.solve(&geo, &mass, &[1.0, 0.0], &mut x).is_err());
+        let (d, o) = (solve(ExactPath::Dense), solve(ExactPath::Ordered));
+        for k in 0..4 {
+            assert!(
+                (d[k] - o[k]).abs() < 1e-12 * d[k].abs().max(1.0),
+                "{d:?} vs {o:?}"
+            );
+        }
     }
 }

@@ -79,23 +79,13 @@ pub struct Estimate {
     pub memory_bytes: u64,
 }
 
-/// The profile of `J M⁻¹ Jᵀ` in link order: for each link `k`, `k − f_k + 1` where `f_k`
-/// is the lowest link sharing a body with it (or `k`). The natural-order Cholesky
-/// factor's fill stays within it. A partitioned run's nodes factor sub-matrices in the
-/// same order, whose profiles are no larger.
-fn profile(scenario: &Scenario) -> u64 {
-    let mut lowest = vec![usize::MAX; scenario.bodies.len()];
-    for (k, l) in scenario.links.iter().enumerate() {
-        for b in [l.a, l.b] {
-            lowest[b] = lowest[b].min(k);
-        }
-    }
-    scenario
-        .links
-        .iter()
-        .enumerate()
-        .map(|(k, l)| (k - lowest[l.a].min(lowest[l.b]) + 1) as u64)
-        .sum()
+/// Entries of the exact solve's factor of the whole scene, from the same symbolic
+/// analysis a monolithic run does (its pattern is bounded by the scene's links, which
+/// are bounded before this is called). A partitioned run's nodes factorize parts of the
+/// scene, with a few ghost links each.
+fn factor_entries(scenario: &Scenario) -> u64 {
+    let ends: Vec<(usize, usize)> = scenario.links.iter().map(|l| (l.a, l.b)).collect();
+    crate::multibody::solver::exact_factor_entries(scenario.bodies.len(), &ends).unwrap_or(u64::MAX)
 }
 
 impl Estimate {
@@ -116,7 +106,7 @@ impl Estimate {
         let exact = matches!(scenario.solver, crate::scenario::model::Solver::Cholesky);
         let factor_entries =
             if exact && scenario.links.len() > crate::multibody::solver::DENSE_MAX_LINKS {
-                profile(scenario)
+                factor_entries(scenario)
             } else {
                 0
             };
@@ -237,16 +227,50 @@ mod tests {
         assert_eq!(Estimate::of(&scene(1.2, 100), None).trace_rows, 13);
     }
 
-    /// The factor bound of a grid against a count by hand: a 2×3 grid has 7 links
-    /// (numbered row by row, each body's +x link before its +y link).
+    /// The profile of `J M⁻¹ Jᵀ` in link order (row `k` from the lowest link sharing a
+    /// body with link `k` to the diagonal): what a factorization in link order fills.
+    fn profile(scenario: &Scenario) -> u64 {
+        let mut lowest = vec![usize::MAX; scenario.bodies.len()];
+        for (k, l) in scenario.links.iter().enumerate() {
+            for b in [l.a, l.b] {
+                lowest[b] = lowest[b].min(k);
+            }
+        }
+        let rows = scenario.links.iter().enumerate();
+        rows.map(|(k, l)| (k - lowest[l.a].min(lowest[l.b]) + 1) as u64)
+            .sum()
+    }
+
+    /// The ordered factor of a 24×24 grid (1104 links) holds at least `A`'s own lower
+    /// triangle and well under what the link order fills (the reason for ordering).
     #[test]
-    fn the_profile_of_a_small_grid() {
-        let s = scene(1.0, 1);
-        // Links: 0 (1-2), 1 (1-4), 2 (2-3), 3 (2-5), 4 (3-6), 5 (4-5), 6 (5-6).
-        // Lowest link sharing a body: 0, 0, 0, 0, 2, 1, 3 → 1+2+3+4+3+5+4.
-        assert_eq!(profile(&s), 22);
+    fn the_ordered_factor_is_far_below_the_link_order_profile() {
+        let s = crate::scenario::parse_str(
+            r#"{"name": "g", "seed": 1, "duration": 0.01, "dt": 0.001,
+                "model": {"grid": {"rows": 24, "cols": 24, "spacing": 1, "mass": 1, "size": 0.1}}}"#,
+            "g",
+        )
+        .unwrap();
+        let e = Estimate::of(&s, None);
+        // Each link shares a body with at most 6 others; A's lower triangle holds each
+        // pair once, plus the diagonal.
+        let lower: u64 = {
+            let mut per_body = vec![0u64; s.bodies.len()];
+            for l in &s.links {
+                per_body[l.a] += 1;
+                per_body[l.b] += 1;
+            }
+            s.links.len() as u64 + per_body.iter().map(|d| d * (d - 1) / 2).sum::<u64>()
+        };
+        assert!(e.factor_entries >= lower, "{} < {lower}", e.factor_entries);
+        let profile = profile(&s);
+        assert!(
+            e.factor_entries * 2 < profile,
+            "ordered {} vs profile {profile}",
+            e.factor_entries
+        );
         // Too few links for the sparse path: no factor entries.
-        assert_eq!(Estimate::of(&s, None).factor_entries, 0);
+        assert_eq!(Estimate::of(&scene(1.0, 1), None).factor_entries, 0);
     }
 
     #[test]

@@ -214,11 +214,12 @@ pub struct StabilizerFile {
 )]
 #[serde(rename_all = "snake_case")]
 pub enum SolverKind {
-    /// `"cholesky"`: exact sparse Cholesky (the default: no solver error to account for).
+    /// `"cholesky"`: exact Cholesky (the default: no solver error to account for),
+    /// sparse in an approximate-minimum-degree order above a few dozen links.
     #[default]
     Cholesky,
-    /// `"cholesky_amd"`: the same exact solve, factorized in an approximate-minimum-degree
-    /// order (faer's sparse Cholesky): far less fill on large grids, other round-off.
+    /// `"cholesky_amd"`: the same as `"cholesky"`, which now always orders for fill; kept
+    /// so that files written when the ordering was opt-in still read.
     CholeskyAmd,
     /// `"cg"`: Jacobi-preconditioned conjugate gradient with a fixed budget.
     Cg,

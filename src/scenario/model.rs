@@ -57,11 +57,9 @@ pub enum Stabilizer {
 /// How the linear system in the multipliers is solved.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Solver {
-    /// Exact sparse Cholesky factorization (symbolic pattern computed once per run).
+    /// Exact Cholesky factorization: dense in place for small systems, else sparse in an
+    /// approximate-minimum-degree order (faer), analysed once per run.
     Cholesky,
-    /// The exact solve in an approximate-minimum-degree order (faer): the symbolic
-    /// analysis once per topology, the numeric factorization every step.
-    OrderedCholesky,
     /// Jacobi-preconditioned conjugate gradient, warm-started from the previous solution.
     ConjugateGradient {
         /// Iteration budget per solve.

@@ -376,11 +376,7 @@ fn solver(s: &SolverFile) -> Result<Solver> {
             if s.tolerance.is_some() {
                 return Err(foreign("solver.tolerance", name));
             }
-            Ok(if s.kind == SolverKind::Cholesky {
-                Solver::Cholesky
-            } else {
-                Solver::OrderedCholesky
-            })
+            Ok(Solver::Cholesky)
         }
         SolverKind::Cg => {
             let max_iterations = s.max_iterations.unwrap_or(DEFAULT_CG_MAX_ITERATIONS);

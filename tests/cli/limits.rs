@@ -122,20 +122,48 @@ fn sizes_and_times_legal_one_by_one_but_not_together_are_refused_at_once() {
         "controller.grid_step",
         "at most 40000 points",
     );
-    // A 1000 × 1000 grid on the exact solve: its natural-order factor would need about
-    // 130 GB; refused at once naming the solver and the CG path's need (about 3 GB).
+}
+
+/// A 1000 × 1000 grid on the exact solve: in link order its factor would have needed
+/// about 130 GB, and the scene was refused; in AMD order it needs about 5.9 GB, so it
+/// plans within the default limit, and a lower `--max-memory` refuses it at once naming
+/// the solver and the CG path's need (about 3 GB), nothing written.
+#[test]
+fn a_million_body_exact_solve_is_planned_from_its_ordered_factor() {
+    let dir = scratch("limits_exact");
     let big = json!({
         "name": "big", "seed": 1, "duration": 0.01, "dt": 0.001,
         "model": {"grid": {"rows": 1000, "cols": 1000, "spacing": 1.0, "mass": 1.0, "size": 0.1}},
         "output": {"decimation": 1000}
     });
-    refused(
-        &dir,
-        "memory",
-        &big,
-        "solver",
-        "{\"kind\": \"cg\"}` needs about 3006 MB",
+    let file = write_json(&dir, "big.json", &big);
+    let f = file.to_str().unwrap();
+    let o = bounded(&["validate", f], Duration::from_secs(60));
+    assert_eq!(o.status.code(), Some(0), "{}", said(&o));
+    assert!(
+        String::from_utf8_lossy(&o.stdout).contains("needs about 5913 MB"),
+        "{}",
+        said(&o)
     );
+    let out = dir.join("big_out");
+    let o = bounded(
+        &[
+            "run",
+            f,
+            "--out",
+            out.to_str().unwrap(),
+            "--max-memory",
+            "4000000000",
+        ],
+        Duration::from_secs(60),
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", said(&o));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("solver") && err.contains("{\"kind\": \"cg\"}` needs about 3006 MB"),
+        "{err}"
+    );
+    assert!(!out.exists(), "run wrote {}", out.display());
 }
 
 #[test]

@@ -350,29 +350,27 @@ fn cg_with_a_generous_budget_matches_the_exact_solve() {
     }
 }
 
-/// The AMD-ordered exact solve (`cholesky_amd`) solves the same `J M⁻¹ Jᵀ ż = r` as the
-/// natural-order one: on an 8×8 grid (112 links, the sparse path) driven for 0.5 s the
-/// states agree to round-off, not bit for bit (another elimination order).
+/// The exact solve of a system above the dense limit (an 8×8 grid, 112 links: faer's
+/// AMD-ordered sparse Cholesky) solves the same `J M⁻¹ Jᵀ ż = r` as CG driven to a
+/// relative residual of 1e-14: over 0.5 s the states agree to 1e-8 m. (The thesis-size
+/// check above runs on the dense path.)
 #[test]
-fn the_amd_ordered_exact_solve_agrees_with_the_natural_order_to_round_off() {
+fn the_ordered_sparse_exact_solve_matches_converged_cg() {
     let base = json!({
         "name": "amd", "seed": 1, "duration": 0.5, "dt": 0.001,
         "model": {"grid": {"rows": 8, "cols": 8, "spacing": 1.8, "mass": 1.0, "size": 0.2}},
         "forces": [{"body": 1, "amplitude": [0, 0, 20], "omega": 2.0}],
         "output": {"decimation": 50}
     });
-    let mut amd = base.clone();
-    amd["solver"] = json!({"kind": "cholesky_amd"});
-    let natural = simulate(&scenario(base), |_, _, _| {});
-    let ordered = simulate(&scenario(amd), |_, _, _| {});
+    let mut cg = base.clone();
+    cg["solver"] = json!({"kind": "cg", "max_iterations": 400, "tolerance": 1e-14});
+    let exact = simulate(&scenario(base), |_, _, _| {});
+    let cg = simulate(&scenario(cg), |_, _, _| {});
     let mut worst = 0.0f64;
-    for (a, b) in natural.p.iter().zip(&ordered.p) {
+    for (a, b) in exact.p.iter().zip(&cg.p) {
         worst = worst.max((a - b).norm());
     }
-    let moved = natural.p.iter().map(|p| p.z.abs()).fold(0.0, f64::max);
+    let moved = exact.p.iter().map(|p| p.z.abs()).fold(0.0, f64::max);
     assert!(moved > 1e-3, "the grid moved ({moved} m)");
-    assert!(
-        worst < 1e-9 * moved.max(1.0),
-        "positions differ by {worst} m"
-    );
+    assert!(worst < 1e-8, "positions differ by {worst} m");
 }

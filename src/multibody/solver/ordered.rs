@@ -1,16 +1,25 @@
-//! The exact solve with a fill-reducing ordering: faer's sparse Cholesky, ordered by
-//! approximate minimum degree (AMD), its symbolic analysis done once per topology and
-//! its numeric factorization every step into buffers kept between steps.
+//! The exact solve of systems too large for the dense path: faer's sparse Cholesky,
+//! ordered by approximate minimum degree (AMD), its symbolic analysis done once per
+//! topology and its numeric factorization every solve into buffers kept between solves.
 //!
-//! Why faer: the natural-order factorization of `J M⁻¹ Jᵀ` fills in its whole profile
-//! (bandwidth about twice the grid's width), which makes the exact path 58–76× slower
-//! per step than CG 10 on a 64×64 grid and needs ~131 GB on a 1000×1000 grid; an AMD
-//! order keeps the factor close to the matrix's own sparsity. faer is the maintained
-//! Rust sparse Cholesky with AMD and supernodal factorization; writing an ordering and
-//! a supernodal factorization here would be a library of its own.
+//! Why faer: factorized in link order, `J M⁻¹ Jᵀ` fills in its whole profile (bandwidth
+//! about twice the grid's width), which made the exact path 58–76× slower per step than
+//! CG 10 on a 64×64 grid and would need ~131 GB on a 1000×1000 grid; an AMD order keeps
+//! the factor close to the matrix's own sparsity. faer is the maintained Rust sparse
+//! Cholesky with AMD and a supernodal factorization; writing an ordering and a
+//! supernodal factorization here would be a library of its own.
+//!
+//! Why supernodal always: faer picks simplicial or supernodal by a flop-count heuristic,
+//! and on these matrices the supernodal factorization was the faster one at every size
+//! the crossover bench measured (`cargo bench --bench solve`, docs/performance.md). One
+//! fixed choice also keeps a run's arithmetic from depending on a heuristic's threshold.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, SymbolicCholesky};
+use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw,
+};
+use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 
@@ -42,14 +51,28 @@ impl Clone for Slot {
     }
 }
 
+/// The symbolic analysis of the lower triangle `(col_ptr, row_idx)` (sorted rows) of an
+/// `n × n` symmetric pattern: AMD order, then the supernodal structure.
+fn analyse(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Option<SymbolicCholesky<usize>> {
+    let a = SymbolicSparseColMatRef::new_checked(n, n, col_ptr, None, row_idx);
+    let params = CholeskySymbolicParams {
+        supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
+        ..Default::default()
+    };
+    factorize_symbolic_cholesky(a, Side::Lower, Default::default(), params).ok()
+}
+
+/// Entries of the factor of the lower triangle `(col_ptr, row_idx)` of an `n × n`
+/// pattern; `None` if faer refuses the pattern.
+pub(super) fn factor_entries(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Option<u64> {
+    analyse(n, col_ptr, row_idx).map(|s| s.len_val() as u64)
+}
+
 impl Ordered {
-    /// The symbolic analysis of the symmetric pattern `(col_ptr, row_idx)` of an `n × n`
-    /// matrix (sorted rows; only the lower triangle is read); `None` if faer refuses it.
+    /// The symbolic analysis of the lower triangle `(col_ptr, row_idx)` (sorted rows) of
+    /// an `n × n` symmetric pattern; `None` if faer refuses it.
     pub(super) fn new(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Option<Ordered> {
-        let a = SymbolicSparseColMatRef::new_checked(n, n, col_ptr, None, row_idx);
-        let symbolic =
-            factorize_symbolic_cholesky(a, Side::Lower, Default::default(), Default::default())
-                .ok()?;
+        let symbolic = analyse(n, col_ptr, row_idx)?;
         let factor_scratch = MemBuffer::try_new(
             symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
         )
@@ -65,13 +88,17 @@ impl Ordered {
     }
 
     /// Factorizes the matrix with these `values` (in the pattern's order) and solves
-    /// `A x = b`; `false` if `A` is not numerically positive definite.
+    /// `A x = b`. `false` if `A` is not numerically positive definite: a pivot of the
+    /// factorization (before its square root) at or below `min_pivot`, or a non-finite
+    /// solution.
+    #[allow(clippy::too_many_arguments)] // one call site; the pattern is the caller's
     pub(super) fn solve(
         &mut self,
         n: usize,
         col_ptr: &[usize],
         row_idx: &[usize],
         values: &[f64],
+        min_pivot: f64,
         b: &[f64],
         x: &mut [f64],
     ) -> bool {
@@ -79,11 +106,15 @@ impl Ordered {
             SymbolicSparseColMatRef::new_checked(n, n, col_ptr, None, row_idx),
             values,
         );
+        let regularization = LltRegularization {
+            dynamic_regularization_delta: 0.0,
+            dynamic_regularization_epsilon: 0.0,
+        };
         let Ok(llt) = self.symbolic.factorize_numeric_llt(
             &mut self.l_values,
             a,
             Side::Lower,
-            Default::default(),
+            regularization,
             Par::Seq,
             MemStack::new(&mut self.factor_scratch),
             Default::default(),
@@ -98,6 +129,30 @@ impl Ordered {
             Par::Seq,
             MemStack::new(&mut self.solve_scratch),
         );
-        x.iter().all(|v| v.is_finite())
+        self.min_pivot_squared() > min_pivot && x.iter().all(|v| v.is_finite())
+    }
+
+    /// The smallest squared diagonal entry of the factor `L` (the pivots of the
+    /// elimination): faer reports only a non-positive pivot, while a pivot that is
+    /// round-off relative to `A`'s diagonal means `A` is singular to working precision.
+    fn min_pivot_squared(&self) -> f64 {
+        let SymbolicCholeskyRaw::Supernodal(s) = self.symbolic.raw() else {
+            // Every analysis here is supernodal (see `analyse`).
+            return f64::NAN;
+        };
+        let (begin, end) = (s.supernode_begin(), s.supernode_end());
+        let (rows_ptr, vals_ptr) = (s.col_ptr_for_row_idx(), s.col_ptr_for_val());
+        let mut min = f64::INFINITY;
+        for sn in 0..s.n_supernodes() {
+            // A supernode's values are one column-major block: its columns' diagonal
+            // block on top of the rows below it.
+            let cols = end[sn] - begin[sn];
+            let rows = cols + rows_ptr[sn + 1] - rows_ptr[sn];
+            for c in 0..cols {
+                let l = self.l_values[vals_ptr[sn] + c * rows + c];
+                min = min.min(l * l);
+            }
+        }
+        min
     }
 }
