@@ -27,9 +27,10 @@
 //!   ε 0.1 m, `cholesky_amd`), at every grid size.
 //!
 //! Rapier at the same dt: `loose` runs its default integration parameters (4 substeps,
-//! 1 PGS iteration per substep); `tight` doubles the substeps (`num_solver_iterations`)
-//! from 4 until its max |w| is at or below dsmcosim's tight max |w| on that grid, or
-//! `--max-substeps` is passed (then the table shows the best it reached and the cost).
+//! 1 PGS iteration per substep); `tight` searches the fewest substeps
+//! (`num_solver_iterations`) at which its max |w| is at or below dsmcosim's tight max |w|
+//! on that grid ([`search_substeps`]), up to `--max-substeps` (if that is not enough, the
+//! table shows the tightest run and its cost).
 //! `--substeps N` skips the search; `--loose-substeps N` replaces Rapier's default 4
 //! substeps in the loose rows. Every run that the search tried is printed on stderr;
 //! the table times the last one.
@@ -570,8 +571,8 @@ fn main() {
                 ),
                 Err(e) => eprintln!("  dsmcosim failed: {e}"),
             }
-            // Rapier: defaults for loose; for tight, double the substeps until its max |w|
-            // is at or below dsmcosim's (or --max-substeps), unless --substeps fixes them.
+            // Rapier: defaults for loose; for tight, the fewest substeps at which its max |w|
+            // is at or below dsmcosim's (up to --max-substeps), unless --substeps fixes them.
             let mut set = RapierSettings::defaults(args.joint);
             if class == Class::Tight {
                 set.warmstart_joints = args.warmstart_joints;
