@@ -301,8 +301,14 @@ impl CoSim {
     /// least [`PARALLEL_MIN_LINKS`] (or the set threshold) links per lock-step, and more
     /// than one thread in the current rayon pool.
     pub fn steps_in_parallel(&self) -> bool {
-        let links: usize = self.nodes.iter().map(|n| n.system.link_count()).sum();
-        self.nodes.len() > 1 && links >= self.parallel_min_links && rayon::current_num_threads() > 1
+        self.nodes.len() > 1
+            && self
+                .nodes
+                .iter()
+                .map(|n| n.system.link_count())
+                .sum::<usize>()
+                >= self.parallel_min_links
+            && rayon::current_num_threads() > 1
     }
 
     /// The scenario being run.
@@ -447,15 +453,18 @@ impl CoSim {
             if time > t || (time == t && class > EventClass::Measurement) {
                 break;
             }
-            self.next_event(obs)?;
+            self.next_event(class, obs)?;
         }
         Ok(())
     }
 
     /// Processes every remaining event: the run to its end.
     pub fn run_to_end(&mut self, obs: &mut dyn Observer) -> Result<()> {
-        while self.next_key().is_some() && !self.finished() {
-            self.next_event(obs)?;
+        while let Some((_, class)) = self.next_key() {
+            if self.finished() {
+                break;
+            }
+            self.next_event(class, obs)?;
         }
         Ok(())
     }
@@ -479,11 +488,15 @@ impl CoSim {
         }
     }
 
-    fn next_event(&mut self, obs: &mut dyn Observer) -> Result<()> {
-        if let Some(ts) = self.step_is_next() {
-            self.next_step = None;
-            self.events += 1;
-            return self.step(ts, obs);
+    /// Processes the next event, of `class` as [`next_key`](Self::next_key) just said:
+    /// the pending step when that is `PartitionStep` (no queued event has that class),
+    /// else the queue's first.
+    fn next_event(&mut self, class: EventClass, obs: &mut dyn Observer) -> Result<()> {
+        if class == EventClass::PartitionStep {
+            if let Some(ts) = self.next_step.take() {
+                self.events += 1;
+                return self.step(ts, obs);
+            }
         }
         let Some((key, event)) = self.kernel.pop() else {
             return Ok(());

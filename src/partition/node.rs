@@ -502,9 +502,15 @@ impl Node {
 
     /// Before the step at `t` (after every delivery at `t`): under `predict`, sets the
     /// extrapolated border forces and owner-side loads for this step and records the
-    /// ghosts' states at `t`. Nothing under `reset`, whose loads change only on arrival.
+    /// ghosts' states at `t`. Nothing under `reset`, whose loads change only on arrival,
+    /// nor on a node without a border.
     pub fn prepare_step(&mut self, t: SimTime) {
-        if self.coupling.scheme == Coupling::Reset {
+        // Reset writes border forces as they arrive; a node with no border (a
+        // monolithic scene) has no force to set, and its extra forces stay zero.
+        let border = !self.held_forces.is_empty()
+            || !self.coupling.ghost_loads.is_empty()
+            || !self.lines.is_empty();
+        if self.coupling.scheme == Coupling::Reset || !border {
             return;
         }
         let rigid = self.state.is_rigid();
