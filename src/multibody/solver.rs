@@ -376,10 +376,7 @@ type LowerPattern = (Vec<usize>, Vec<usize>, BTreeMap<(usize, usize), usize>);
 /// The lower triangle of `A`'s pattern (entry `(k, l)`, `k ≥ l`, wherever links `k` and
 /// `l` share a body) in compressed-column form with sorted rows, and each entry's
 /// position keyed by `(column, row)`.
-fn lower_pattern(
-    m: usize,
-    incident: &[Vec<(usize, Side)>],
-) -> LowerPattern {
+fn lower_pattern(m: usize, incident: &[Vec<(usize, Side)>]) -> LowerPattern {
     let mut slots: BTreeMap<(usize, usize), usize> = BTreeMap::new();
     for inc in incident {
         for &(k, _) in inc {
@@ -777,5 +774,27 @@ mod tests {
                 "{d:?} vs {o:?}"
             );
         }
+    }
+
+    #[test]
+    fn a_clone_shares_the_analysis_and_solves_to_the_same_bits() {
+        let m = DENSE_MAX_LINKS + 9;
+        let (geo, mass) = chain(m);
+        let b: Vec<f64> = (0..m).map(|k| (k as f64).sin()).collect();
+        let mut s = JsSolver::new(Solver::Cholesky, m + 1, &geo.ends);
+        let mut x = vec![0.0; m];
+        s.solve(&geo, &mass, &b, &mut x).unwrap();
+        let mut fork = s.clone();
+        assert!(
+            fork.exact.as_ref().unwrap().ordered.0.is_some(),
+            "analysis kept"
+        );
+        let mut y = vec![0.0; m];
+        fork.solve(&geo, &mass, &b, &mut y).unwrap();
+        s.solve(&geo, &mass, &b, &mut x).unwrap();
+        assert_eq!(
+            x.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+            y.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+        );
     }
 }

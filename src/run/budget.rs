@@ -28,10 +28,10 @@ pub const MEMORY_BASE: u64 = 6_000_000;
 /// of measured peaks (`/usr/bin/time -f %M`, monolithic grids, CG 10, 10 steps): 16.7 MB
 /// at 64×64, 51.2 MB at 128×128, 186.7 MB at 256×256, i.e. 2.8 kB per body; rounded up.
 pub const MEMORY_PER_BODY: u64 = 3_000;
-/// Memory per entry of the exact solve's factor bound [bytes]: the sparse Cholesky
-/// factorizes `J M⁻¹ Jᵀ` in link order, and its fill stays within the matrix's profile
-/// (row `k` from its first non-zero column to the diagonal). Measured peaks above the CG
-/// path's, per profile entry: 27.7 (64×64), 25.5 (128×128), 24.5 (256×256); rounded up.
+/// Memory per entry of the exact solve's factor [bytes] (the AMD-ordered sparse
+/// Cholesky's, as its symbolic analysis counts them). Measured peaks above the CG path's
+/// (`/usr/bin/time -f %M`, monolithic grids of point masses, 10 steps), per factor
+/// entry: 25.6 (64×64), 23.3 (128×128), 21.9 (256×256), 17.5 (512×512); rounded up.
 pub const BYTES_PER_FACTOR_ENTRY: u64 = 32;
 
 /// Limits a run is checked against.

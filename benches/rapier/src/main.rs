@@ -24,7 +24,7 @@
 //! - `loose`: the thesis defaults (explicit Euler, SMC μ 50 ms, K 10 m/s, ε 0.1 m) with
 //!   CG 10 (`{"kind": "cg", "max_iterations": 10, "tolerance": 0}`);
 //! - `tight`: the settings of `scenarios/grid64_tight.json` (RK4, SMC μ 2 ms, K 200 m/s,
-//!   ε 0.1 m, `cholesky_amd`), at every grid size.
+//!   ε 0.1 m, `cholesky`), at every grid size.
 //!
 //! Rapier at the same dt: `loose` runs its default integration parameters (4 substeps,
 //! 1 PGS iteration per substep); `tight` searches the fewest substeps
@@ -108,7 +108,7 @@ impl Class {
             Class::Tight => json!({
                 "integrator": "rk4",
                 "stabilizer": {"kind": "smc", "mu": 0.002, "k": 200.0, "epsilon": 0.1},
-                "solver": {"kind": "cholesky_amd"},
+                "solver": {"kind": "cholesky"},
             }),
         }
     }
@@ -116,7 +116,7 @@ impl Class {
     fn dsm_label(self) -> &'static str {
         match self {
             Class::Loose => "Euler, SMC μ 50 ms K 10, CG 10",
-            Class::Tight => "RK4, SMC μ 2 ms K 200, cholesky_amd",
+            Class::Tight => "RK4, SMC μ 2 ms K 200, cholesky",
         }
     }
 }

@@ -14,6 +14,8 @@
 //! the crossover bench measured (`cargo bench --bench solve`, docs/performance.md). One
 //! fixed choice also keeps a run's arithmetic from depending on a heuristic's threshold.
 
+use std::sync::Arc;
+
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::cholesky::{
@@ -25,7 +27,8 @@ use faer::{Conj, MatMut, Par, Side};
 
 /// The ordered factorization of one pattern, with its scratch memory.
 pub(super) struct Ordered {
-    symbolic: SymbolicCholesky<usize>,
+    /// The analysis, shared by the clones of a solver (it depends on the pattern only).
+    symbolic: Arc<SymbolicCholesky<usize>>,
     l_values: Vec<f64>,
     factor_scratch: MemBuffer,
     solve_scratch: MemBuffer,
@@ -39,7 +42,8 @@ impl std::fmt::Debug for Ordered {
     }
 }
 
-/// An ordered factorization held by a solver; a clone (a fork of the world) starts
+/// An ordered factorization held by a solver. A clone (a fork of the world) shares the
+/// analysis and gets buffers of its own; a solver restored from a checkpoint starts
 /// empty and analyses the pattern again on its first solve: the same AMD order, so the
 /// same bits.
 #[derive(Debug, Default)]
@@ -47,7 +51,11 @@ pub(super) struct Slot(pub(super) Option<Ordered>);
 
 impl Clone for Slot {
     fn clone(&self) -> Slot {
-        Slot(None)
+        Slot(
+            self.0
+                .as_ref()
+                .and_then(|o| Ordered::with(Arc::clone(&o.symbolic))),
+        )
     }
 }
 
@@ -72,7 +80,11 @@ impl Ordered {
     /// The symbolic analysis of the lower triangle `(col_ptr, row_idx)` (sorted rows) of
     /// an `n × n` symmetric pattern; `None` if faer refuses it.
     pub(super) fn new(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Option<Ordered> {
-        let symbolic = analyse(n, col_ptr, row_idx)?;
+        Ordered::with(Arc::new(analyse(n, col_ptr, row_idx)?))
+    }
+
+    /// The factorization of an analysed pattern, with buffers of its own.
+    fn with(symbolic: Arc<SymbolicCholesky<usize>>) -> Option<Ordered> {
         let factor_scratch = MemBuffer::try_new(
             symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
         )
