@@ -11,7 +11,7 @@
 # the stored directory untouched and stops the script. Directories ending in .new (left
 # by `dsmcosim check`) are not stored runs. To add a stored run:
 # `dsmcosim run scenarios/<name>.json --out results/<name>`. The longest stored run,
-# results/grid64_tight/ (a 64×64 net at tight accuracy), takes about 2.5 min of it.
+# results/grid64_tight/ (a 64×64 net at tight accuracy), takes about 2 min of it.
 #
 # --studies also regenerates the speed-accuracy studies (results/tradeoff/, with its
 # subdirectories), the stability map (results/stability/) and the coupling study

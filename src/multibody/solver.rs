@@ -123,7 +123,7 @@ pub const DENSE_MAX_LINKS: usize = 32;
 pub enum ExactPath {
     /// Dense in place, with the forward substitution inside the factorization.
     Dense,
-    /// faer's supernodal sparse Cholesky in an AMD order.
+    /// faer's sparse Cholesky in an AMD order (simplicial or supernodal by size).
     Ordered,
 }
 
@@ -755,6 +755,24 @@ mod tests {
                 assert!(r.is_err(), "{path:?}, tilt {tilt}: {x:?}");
             }
         }
+    }
+
+    #[test]
+    fn the_supernodal_factorization_reports_a_singular_system() {
+        // A chain long enough for the supernodal path whose second link repeats the
+        // first (same bodies, same direction).
+        let m = ordered::SUPERNODAL_MIN_LINKS + 10;
+        let (mut geo, mass) = chain(m);
+        geo.ends[1] = geo.ends[0];
+        geo.n[1] = geo.n[0];
+        let b: Vec<f64> = (0..m).map(|k| (k as f64).cos()).collect();
+        let mut s = JsSolver::new(Solver::Cholesky, m + 1, &geo.ends);
+        let mut x = vec![0.0; m];
+        assert!(s.solve(&geo, &mass, &b, &mut x).is_err());
+        // The same chain without the repeat solves.
+        let (geo, mass) = chain(m);
+        let mut s = JsSolver::new(Solver::Cholesky, m + 1, &geo.ends);
+        s.solve(&geo, &mass, &b, &mut x).unwrap();
     }
 
     #[test]

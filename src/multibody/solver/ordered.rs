@@ -9,10 +9,13 @@
 //! Cholesky with AMD and a supernodal factorization; writing an ordering and a
 //! supernodal factorization here would be a library of its own.
 //!
-//! Why supernodal always: faer picks simplicial or supernodal by a flop-count heuristic,
-//! and on these matrices the supernodal factorization was the faster one at every size
-//! the crossover bench measured (`cargo bench --bench solve`, docs/performance.md). One
-//! fixed choice also keeps a run's arithmetic from depending on a heuristic's threshold.
+//! Simplicial below [`SUPERNODAL_MIN_LINKS`], supernodal from there: faer picks one by a
+//! flop-count heuristic, which chose simplicial on a 64×64 grid, where supernodal was
+//! 1.2–1.3× faster (`dsmcosim run` of 300 steps: 1.13 s against 1.35–1.46 s). On the
+//! tight scene's settings for 1 s (RK4, two runs each): 16×16 (480 links) 0.37–0.39 s
+//! simplicial against 0.49 s supernodal, 32×32 (1984 links) 2.40–2.48 s against
+//! 2.38–2.39 s. A threshold on the size also keeps a run's arithmetic from depending on
+//! a heuristic's flop estimate.
 
 use std::sync::Arc;
 
@@ -59,12 +62,20 @@ impl Clone for Slot {
     }
 }
 
+/// Systems of at least this many links are factorized supernodally, smaller ones
+/// simplicially (see the module's documentation for the measurements).
+pub(super) const SUPERNODAL_MIN_LINKS: usize = 1000;
+
 /// The symbolic analysis of the lower triangle `(col_ptr, row_idx)` (sorted rows) of an
-/// `n × n` symmetric pattern: AMD order, then the supernodal structure.
+/// `n × n` symmetric pattern: AMD order, then the simplicial or supernodal structure.
 fn analyse(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Option<SymbolicCholesky<usize>> {
     let a = SymbolicSparseColMatRef::new_checked(n, n, col_ptr, None, row_idx);
     let params = CholeskySymbolicParams {
-        supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
+        supernodal_flop_ratio_threshold: if n >= SUPERNODAL_MIN_LINKS {
+            SupernodalThreshold::FORCE_SUPERNODAL
+        } else {
+            SupernodalThreshold::FORCE_SIMPLICIAL
+        },
         ..Default::default()
     };
     factorize_symbolic_cholesky(a, Side::Lower, Default::default(), params).ok()
@@ -148,9 +159,16 @@ impl Ordered {
     /// elimination): faer reports only a non-positive pivot, while a pivot that is
     /// round-off relative to `A`'s diagonal means `A` is singular to working precision.
     fn min_pivot_squared(&self) -> f64 {
-        let SymbolicCholeskyRaw::Supernodal(s) = self.symbolic.raw() else {
-            // Every analysis here is supernodal (see `analyse`).
-            return f64::NAN;
+        let s = match self.symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(s) => {
+                // Each column's diagonal entry is its first.
+                let cols = &s.col_ptr()[..s.ncols()];
+                return cols
+                    .iter()
+                    .map(|&i| self.l_values[i] * self.l_values[i])
+                    .fold(f64::INFINITY, f64::min);
+            }
+            SymbolicCholeskyRaw::Supernodal(s) => s,
         };
         let (begin, end) = (s.supernode_begin(), s.supernode_end());
         let (rows_ptr, vals_ptr) = (s.col_ptr_for_row_idx(), s.col_ptr_for_val());
