@@ -311,9 +311,13 @@ fn print_ratios(since: SystemTime) {
 /// One timed run of a case [s]; setup (world copy, recorder) is outside the timing.
 type Case = Box<dyn FnMut() -> f64>;
 
-/// The same comparisons as minima of interleaved runs: every round runs each case once,
-/// so a change of machine load hits all of them alike, and the minimum discards the
-/// runs that load slowed down. On a shared machine this is the steadier ratio.
+/// A statistic of a case's sorted run times [s].
+type Summary = fn(&[f64]) -> f64;
+
+/// The same comparisons as minima and as medians of interleaved runs: every round runs
+/// each case once, so a change of machine load hits all of them alike; the minimum
+/// discards the runs that load slowed down (on a shared machine the steadier ratio), the
+/// median is the typical run.
 fn interleaved(rounds: usize) {
     let point = scene(|_| {});
     let rigid = scene(|v| v["body_model"] = json!("rigid"));
@@ -380,28 +384,40 @@ fn interleaved(rounds: usize) {
         ("record_trace_decimation_100", recorded(&point, Some(100))),
         ("record_trace_decimation_1", recorded(&point, Some(1))),
     ];
-    let mut best = vec![f64::INFINITY; cases.len()];
+    let mut times = vec![Vec::with_capacity(rounds); cases.len()];
     for _ in 0..rounds {
-        for (b, (_, case)) in best.iter_mut().zip(cases.iter_mut()) {
-            *b = b.min(case());
+        for (t, (_, case)) in times.iter_mut().zip(cases.iter_mut()) {
+            t.push(case());
         }
     }
-    let get = |name: &str| {
-        cases
-            .iter()
-            .position(|(n, _)| *n == name)
-            .map(|i| best[i])
-            .unwrap_or(f64::NAN)
-    };
-    println!("\nthe same, minimum of {rounds} interleaved runs per case:");
-    for &(label, num, den) in RATIOS {
-        let (a, b) = (get(num), get(den));
-        println!(
-            "  {label:<58} {:>6.3}  ({:.3} ms / {:.3} ms)",
-            a / b,
-            a * 1e3,
-            b * 1e3
-        );
+    for t in &mut times {
+        t.sort_by(f64::total_cmp);
+    }
+    let summaries: [(&str, Summary); 2] = [
+        ("minimum", |t| t[0]),
+        ("median", |t| {
+            let n = t.len();
+            (t[(n - 1) / 2] + t[n / 2]) / 2.0
+        }),
+    ];
+    for (what, summary) in summaries {
+        let get = |name: &str| {
+            cases
+                .iter()
+                .position(|(n, _)| *n == name)
+                .map(|i| summary(&times[i]))
+                .unwrap_or(f64::NAN)
+        };
+        println!("\nthe same, {what} of {rounds} interleaved runs per case:");
+        for &(label, num, den) in RATIOS {
+            let (a, b) = (get(num), get(den));
+            println!(
+                "  {label:<58} {:>6.3}  ({:.3} ms / {:.3} ms)",
+                a / b,
+                a * 1e3,
+                b * 1e3
+            );
+        }
     }
 }
 
