@@ -22,7 +22,6 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant, SystemTime};
 
 use criterion::{criterion_group, BenchmarkId, Criterion, Throughput};
-use dsmcosim::kernel::SimTime;
 use dsmcosim::multibody::solver::{ExactPath, Geometry, JsSolver, MassData, DENSE_MAX_LINKS};
 use dsmcosim::report::{write_line_plot, LinePlot, Scale, Series};
 use nalgebra::{Matrix3, Vector3};
@@ -123,22 +122,7 @@ fn growth(c: &mut Criterion) {
                 // analysis, so no restart pays for it.
                 let (system, state, t) =
                     setup.get_or_insert_with(|| common::warm_grid(n, solver.clone(), "rigid", 20));
-                bench.iter_custom(|iters| {
-                    let mut elapsed = Duration::ZERO;
-                    let mut done = 0;
-                    while done < iters {
-                        let (mut sys, mut st, mut now) = (system.clone(), state.clone(), *t);
-                        let chunk = (iters - done).min(1000);
-                        let start = Instant::now();
-                        for _ in 0..chunk {
-                            sys.step(now, &mut st).expect("bench step");
-                            now = SimTime(now.0 + 1_000_000);
-                        }
-                        elapsed += start.elapsed();
-                        done += chunk;
-                    }
-                    elapsed
-                })
+                bench.iter_custom(|iters| common::time_steps(system, state, *t, iters))
             });
         }
     }

@@ -8,7 +8,6 @@
 
 mod common;
 
-use std::time::{Duration, Instant};
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use dsmcosim::kernel::SimTime;
@@ -64,22 +63,7 @@ fn bench_steps(c: &mut Criterion) {
                 );
                 (sys, st, t)
             });
-            b.iter_custom(|iters| {
-                let mut elapsed = Duration::ZERO;
-                let mut done = 0;
-                while done < iters {
-                    let (mut sys, mut st, mut tt) = (system.clone(), state.clone(), *t);
-                    let chunk = (iters - done).min(1000);
-                    let start = Instant::now();
-                    for _ in 0..chunk {
-                        sys.step(tt, &mut st).expect("bench step");
-                        tt = SimTime(tt.0 + 1_000_000);
-                    }
-                    elapsed += start.elapsed();
-                    done += chunk;
-                }
-                elapsed
-            })
+            b.iter_custom(|iters| common::time_steps(system, state, *t, iters))
         });
     }
     group.finish();
