@@ -98,7 +98,8 @@ enum Side {
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 struct Exact {
     /// Column offsets of `A`'s lower triangle in compressed-column form (rows sorted
-    /// within a column, so each column's diagonal entry is its first).
+    /// within a column, so each column's diagonal entry is its first); empty on the
+    /// dense path.
     col_ptr: Vec<usize>,
     /// Row indices of the lower triangle.
     row_idx: Vec<usize>,
@@ -263,7 +264,13 @@ impl Exact {
     fn new(bodies: usize, ends: &[(usize, usize)], dense: bool) -> Exact {
         let m = ends.len();
         let incident = incident_links(bodies, ends);
-        let (col_ptr, row_idx, slots) = lower_pattern(m, &incident);
+        // The dense path indexes its row-major matrix directly; only the sparse one
+        // needs the compressed pattern.
+        let (col_ptr, row_idx, slots) = if dense {
+            (Vec::new(), Vec::new(), BTreeMap::new())
+        } else {
+            lower_pattern(m, &incident)
+        };
         let mut entries = Vec::new();
         for (body, inc) in incident.iter().enumerate() {
             for &(k, sk) in inc {
