@@ -8,7 +8,6 @@
 
 mod common;
 
-
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use dsmcosim::kernel::SimTime;
 use dsmcosim::multibody::{State, System};
