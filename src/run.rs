@@ -279,6 +279,16 @@ pub(crate) fn stabilizer_json(scenario: &Scenario) -> Value {
 pub(crate) fn solver_json(scenario: &Scenario) -> Value {
     match scenario.solver {
         Solver::Cholesky => json!({"kind": "cholesky"}),
+        Solver::CholeskyPcg {
+            refactor_every,
+            tolerance,
+            max_iterations,
+        } => json!({
+            "kind": "cholesky_pcg",
+            "refactor_every": refactor_every,
+            "max_iterations": max_iterations,
+            "tolerance": tolerance,
+        }),
         Solver::ConjugateGradient {
             max_iterations,
             tolerance,

@@ -16,6 +16,7 @@
 
 mod cg;
 mod ordered;
+mod reuse;
 
 use std::collections::BTreeMap;
 
@@ -114,6 +115,8 @@ struct Exact {
     /// restore: the same AMD order, so the same bits).
     #[serde(skip)]
     ordered: ordered::Slot,
+    /// On the sparse path of `cholesky_pcg`: the factor's reuse between factorizations.
+    reuse: Option<reuse::Reuse>,
 }
 
 /// Systems with at most this many links use the dense in-place Cholesky.
@@ -142,11 +145,27 @@ pub struct JsSolver {
 impl JsSolver {
     /// Prepares a solver for `bodies` bodies and links with the given ends.
     pub fn new(kind: Solver, bodies: usize, ends: &[(usize, usize)]) -> JsSolver {
+        let dense = ends.len() <= DENSE_MAX_LINKS;
         let (exact, cg) = match kind {
-            Solver::Cholesky => (
-                Some(Exact::new(bodies, ends, ends.len() <= DENSE_MAX_LINKS)),
-                None,
-            ),
+            Solver::Cholesky => (Some(Exact::new(bodies, ends, dense)), None),
+            Solver::CholeskyPcg {
+                refactor_every,
+                tolerance,
+                max_iterations,
+            } => {
+                let mut exact = Exact::new(bodies, ends, dense);
+                // A dense system factorizes every solve: the reuse pays only where
+                // the factorization dominates.
+                if !dense {
+                    exact.reuse = Some(reuse::Reuse::new(
+                        refactor_every,
+                        tolerance,
+                        max_iterations,
+                        ends.len(),
+                    ));
+                }
+                (Some(exact), None)
+            }
             Solver::ConjugateGradient {
                 max_iterations,
                 tolerance,
@@ -175,9 +194,21 @@ impl JsSolver {
         }
     }
 
-    /// Iterations of the last CG solve (0 on the exact path).
+    /// Iterations of the last CG solve, or of the last preconditioned solve of
+    /// `cholesky_pcg` (0 when it factorized; 0 on the exact path).
     pub fn last_iterations(&self) -> usize {
-        self.cg.as_ref().map_or(0, cg::Cg::last_iterations)
+        match (&self.cg, &self.exact) {
+            (Some(cg), _) => cg.last_iterations(),
+            (None, Some(e)) => e.reuse.as_ref().map_or(0, reuse::Reuse::last_iterations),
+            (None, None) => 0,
+        }
+    }
+
+    /// Factorizations of `A` so far on the sparse path of `cholesky_pcg` (`None` on
+    /// any other path, which factorizes every solve or never).
+    pub fn factorizations(&self) -> Option<u64> {
+        let e = self.exact.as_ref()?;
+        e.reuse.as_ref().map(reuse::Reuse::factorizations)
     }
 
     /// When the last solve was a CG solve that stopped at its iteration budget above its
@@ -305,6 +336,7 @@ impl Exact {
             entries,
             dense: dense.then(|| vec![0.0; m * m]),
             ordered: ordered::Slot::default(),
+            reuse: None,
         }
     }
 
@@ -338,26 +370,45 @@ impl Exact {
             return dense_cholesky_solve(a, b, x);
         }
         let n = self.col_ptr.len() - 1;
+        let pattern = (n, &self.col_ptr[..], &self.row_idx[..]);
+        // The diagonal entry is each column's first.
+        let min_pivot = |values: &[f64]| {
+            let max_diag = self.col_ptr[..n]
+                .iter()
+                .map(|&i| values[i])
+                .fold(0.0, f64::max);
+            SINGULAR_PIVOT * max_diag
+        };
         if self.ordered.0.is_none() {
-            self.ordered.0 = ordered::Ordered::new(n, &self.col_ptr, &self.row_idx);
+            let layout = if self.reuse.is_some() {
+                ordered::Layout::Simplicial
+            } else {
+                ordered::Layout::BySize
+            };
+            self.ordered.0 = ordered::Ordered::new(n, &self.col_ptr, &self.row_idx, layout);
+            // Restored from a checkpoint with a factor in use: factorize the values it
+            // was made of (the same bits as the factor lost).
+            if let (Some(o), Some(old)) = (
+                &mut self.ordered.0,
+                self.reuse.as_ref().and_then(reuse::Reuse::lost_factor),
+            ) {
+                if !o.factorize(pattern, old, min_pivot(old)) {
+                    return Err(SolveError::NotPositiveDefinite);
+                }
+            }
         }
         let Some(o) = &mut self.ordered.0 else {
             return Err(SolveError::NotPositiveDefinite);
         };
-        // The diagonal entry is each column's first.
-        let max_diag = self.col_ptr[..n]
-            .iter()
-            .map(|&i| self.values[i])
-            .fold(0.0, f64::max);
-        if o.solve(
-            n,
-            &self.col_ptr,
-            &self.row_idx,
-            &self.values,
-            SINGULAR_PIVOT * max_diag,
-            b,
-            x,
-        ) {
+        if let Some(r) = &mut self.reuse {
+            if matches!(r.plan(), reuse::Plan::Iterate)
+                && r.iterate(o, (&self.col_ptr, &self.row_idx, &self.values), b, x)
+            {
+                return Ok(());
+            }
+            r.factorized(&self.values);
+        }
+        if o.solve(pattern, &self.values, min_pivot(&self.values), b, x) {
             Ok(())
         } else {
             Err(SolveError::NotPositiveDefinite)
@@ -821,5 +872,121 @@ mod tests {
             x.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
             y.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
         );
+    }
+
+    /// The chain of `chain(m)` turned by `angle` about z at every link.
+    fn turned(m: usize, angle: f64) -> (Geometry, MassData) {
+        let (mut geo, mass) = chain(m);
+        let r = nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), angle);
+        for (k, n) in geo.n.iter_mut().enumerate() {
+            *n =
+                r * nalgebra::Rotation3::from_axis_angle(&Vector3::x_axis(), angle * k as f64) * *n;
+        }
+        (geo, mass)
+    }
+
+    fn pcg(refactor_every: usize, tolerance: f64, max_iterations: usize) -> Solver {
+        Solver::CholeskyPcg {
+            refactor_every,
+            tolerance,
+            max_iterations,
+        }
+    }
+
+    fn bits(x: &[f64]) -> Vec<u64> {
+        x.iter().map(|v| v.to_bits()).collect()
+    }
+
+    #[test]
+    fn a_reused_factor_solves_each_system_to_its_tolerance() {
+        let m = DENSE_MAX_LINKS + 40;
+        let b: Vec<f64> = (0..m).map(|k| (k as f64 * 0.37).sin() + 0.5).collect();
+        let mut reused = JsSolver::new(pcg(4, 1e-10, 10), m + 1, &ends_of(m));
+        let mut x = vec![0.0; m];
+        for solve in 0..12 {
+            // The links turn by 1 mrad per solve, as links do over a step.
+            let (geo, mass) = turned(m, 1e-3 * solve as f64);
+            reused.solve(&geo, &mass, &b, &mut x).unwrap();
+            if solve % 4 != 0 {
+                assert!(reused.last_iterations() >= 1, "solve {solve} iterated");
+            }
+            let mut ax = vec![0.0; m];
+            reused.apply(&geo, &mass, &x, &mut ax);
+            let r: f64 = ax
+                .iter()
+                .zip(&b)
+                .map(|(a, b)| (a - b).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            let norm_b: f64 = b.iter().map(|b| b * b).sum::<f64>().sqrt();
+            assert!(
+                r <= 1e-10 * norm_b * 1.0001,
+                "solve {solve}: residual {r:e}"
+            );
+        }
+        // Every solve between factorizations converged: one factorization per four.
+        assert_eq!(reused.factorizations(), Some(3));
+    }
+
+    #[test]
+    fn a_solve_that_misses_its_tolerance_factorizes_and_solves_exactly() {
+        let m = DENSE_MAX_LINKS + 40;
+        let b: Vec<f64> = (0..m).map(|k| (k as f64 * 0.37).cos()).collect();
+        // One iteration cannot reach 1e-14 after a 0.2 rad turn of every link.
+        let mut reused = JsSolver::new(pcg(100, 1e-14, 1), m + 1, &ends_of(m));
+        let mut exact = JsSolver::new(Solver::Cholesky, m + 1, &ends_of(m));
+        let (mut x, mut y) = (vec![0.0; m], vec![0.0; m]);
+        for solve in 0..3 {
+            let (geo, mass) = turned(m, 0.2 * solve as f64);
+            reused.solve(&geo, &mass, &b, &mut x).unwrap();
+            exact.solve(&geo, &mass, &b, &mut y).unwrap();
+            assert_eq!(bits(&x), bits(&y), "solve {solve}");
+        }
+        assert_eq!(reused.factorizations(), Some(3));
+    }
+
+    #[test]
+    fn a_reused_factor_forks_and_restores_to_the_same_bits() {
+        let m = DENSE_MAX_LINKS + 40;
+        let b: Vec<f64> = (0..m).map(|k| 1.0 + (k % 5) as f64).collect();
+        let mut s = JsSolver::new(pcg(8, 1e-12, 10), m + 1, &ends_of(m));
+        let mut x = vec![0.0; m];
+        for solve in 0..3 {
+            let (geo, mass) = turned(m, 1e-3 * solve as f64);
+            s.solve(&geo, &mass, &b, &mut x).unwrap();
+        }
+        // Mid-reuse: a fork, and a checkpoint's round trip (which drops the factor).
+        let mut fork = (s.clone(), x.clone());
+        let bytes = postcard::to_stdvec(&s).unwrap();
+        let mut restored = (postcard::from_bytes::<JsSolver>(&bytes).unwrap(), x.clone());
+        assert!(restored.0.exact.as_ref().unwrap().ordered.0.is_none());
+        for solve in 3..10 {
+            let (geo, mass) = turned(m, 1e-3 * solve as f64);
+            s.solve(&geo, &mass, &b, &mut x).unwrap();
+            fork.0.solve(&geo, &mass, &b, &mut fork.1).unwrap();
+            restored.0.solve(&geo, &mass, &b, &mut restored.1).unwrap();
+            assert_eq!(bits(&x), bits(&fork.1), "fork, solve {solve}");
+            assert_eq!(bits(&x), bits(&restored.1), "restored, solve {solve}");
+        }
+        assert_eq!(s.factorizations(), Some(2));
+    }
+
+    #[test]
+    fn small_systems_factorize_every_solve_under_cholesky_pcg() {
+        let m = DENSE_MAX_LINKS;
+        let (geo, mass) = chain(m);
+        let b = vec![1.0; m];
+        let mut s = JsSolver::new(pcg(4, 1e-10, 10), m + 1, &geo.ends);
+        let mut e = JsSolver::new(Solver::Cholesky, m + 1, &geo.ends);
+        let (mut x, mut y) = (vec![0.0; m], vec![0.0; m]);
+        s.solve(&geo, &mass, &b, &mut x).unwrap();
+        e.solve(&geo, &mass, &b, &mut y).unwrap();
+        assert!(s.is_dense());
+        assert_eq!(s.factorizations(), None);
+        assert_eq!(bits(&x), bits(&y));
+    }
+
+    fn ends_of(m: usize) -> Vec<(usize, usize)> {
+        chain(m).0.ends
     }
 }

@@ -103,7 +103,11 @@ impl Estimate {
         let checkpoints = checkpoint_every
             .filter(|e| e.0 > 0)
             .map_or(0, |e| scenario.duration.0 / e.0);
-        let exact = matches!(scenario.solver, crate::scenario::model::Solver::Cholesky);
+        let exact = matches!(
+            scenario.solver,
+            crate::scenario::model::Solver::Cholesky
+                | crate::scenario::model::Solver::CholeskyPcg { .. }
+        );
         let factor_entries =
             if exact && scenario.links.len() > crate::multibody::solver::DENSE_MAX_LINKS {
                 factor_entries(scenario)

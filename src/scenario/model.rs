@@ -60,6 +60,18 @@ pub enum Solver {
     /// Exact Cholesky factorization: dense in place for small systems, else sparse in an
     /// approximate-minimum-degree order (faer), analysed once per run.
     Cholesky,
+    /// The exact path's factor reused: `A` factorized every `refactor_every` solves (on
+    /// systems above the dense path's size), the solves between them by CG
+    /// preconditioned with the last factor to a relative residual `tolerance`, a solve
+    /// that misses it in `max_iterations` factorizing afresh.
+    CholeskyPcg {
+        /// Solves per factorization (≥ 1; RK4 makes 4 solves per step, the Eulers 1).
+        refactor_every: usize,
+        /// Relative residual `‖b − A x‖ / ‖b‖` of a preconditioned solve.
+        tolerance: f64,
+        /// Preconditioned iterations before a solve factorizes instead.
+        max_iterations: usize,
+    },
     /// Jacobi-preconditioned conjugate gradient, warm-started from the previous solution.
     ConjugateGradient {
         /// Iteration budget per solve.

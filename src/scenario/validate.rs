@@ -40,7 +40,8 @@ use self::partition::partition;
 use super::file::{
     ForceFile, IntegratorFile, MeasurementFile, OutputFile, ScenarioFile, SolverFile, SolverKind,
     StabilizerFile, StabilizerKind, DEFAULT_CG_MAX_ITERATIONS, DEFAULT_CG_TOLERANCE,
-    DEFAULT_MEASUREMENT_PERIOD, DEFAULT_SMC_EPSILON, DEFAULT_SMC_K, DEFAULT_SMC_MU,
+    DEFAULT_MEASUREMENT_PERIOD, DEFAULT_PCG_MAX_ITERATIONS, DEFAULT_PCG_REFACTOR_EVERY,
+    DEFAULT_PCG_TOLERANCE, DEFAULT_SMC_EPSILON, DEFAULT_SMC_K, DEFAULT_SMC_MU,
 };
 use super::model::{ForceSpec, Integrator, NetworkSpec, OutputSpec, Scenario, Solver, Stabilizer};
 use crate::error::{Error, Result};
@@ -376,9 +377,46 @@ fn solver(s: &SolverFile) -> Result<Solver> {
             if s.tolerance.is_some() {
                 return Err(foreign("solver.tolerance", name));
             }
+            if s.refactor_every.is_some() {
+                return Err(foreign("solver.refactor_every", name));
+            }
             Ok(Solver::Cholesky)
         }
+        SolverKind::CholeskyPcg => {
+            let at_least_one = |field: &str, v: usize| {
+                if v == 0 {
+                    Err(Error::invalid(field, "must be ≥ 1 (got 0)"))
+                } else {
+                    Ok(v)
+                }
+            };
+            let refactor_every = at_least_one(
+                "solver.refactor_every",
+                s.refactor_every.unwrap_or(DEFAULT_PCG_REFACTOR_EVERY),
+            )?;
+            let max_iterations = at_least_one(
+                "solver.max_iterations",
+                s.max_iterations.unwrap_or(DEFAULT_PCG_MAX_ITERATIONS),
+            )?;
+            let tolerance = s.tolerance.unwrap_or(DEFAULT_PCG_TOLERANCE);
+            // A zero tolerance could never be met (round-off): every solve would
+            // iterate to its budget and then factorize anyway.
+            if !(tolerance > 0.0 && tolerance < 1.0) {
+                return Err(Error::invalid(
+                    "solver.tolerance",
+                    format!("must be in (0, 1) for cholesky_pcg (got {tolerance})"),
+                ));
+            }
+            Ok(Solver::CholeskyPcg {
+                refactor_every,
+                tolerance,
+                max_iterations,
+            })
+        }
         SolverKind::Cg => {
+            if s.refactor_every.is_some() {
+                return Err(foreign("solver.refactor_every", "cg"));
+            }
             let max_iterations = s.max_iterations.unwrap_or(DEFAULT_CG_MAX_ITERATIONS);
             if max_iterations == 0 {
                 return Err(Error::invalid(

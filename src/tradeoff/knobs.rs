@@ -20,6 +20,7 @@ use serde_json::{json, Value};
 
 use crate::error::Result;
 use crate::kernel::SimTime;
+use crate::multibody::solver::DENSE_MAX_LINKS;
 use crate::scenario::model::{Integrator, Stabilizer};
 use crate::scenario::{parse_str, Scenario};
 
@@ -306,11 +307,20 @@ pub const KNOBS: &[Knob] = &[
         when: "always",
         ordered: false,
         applies: always,
-        settings: |_| {
+        settings: |s| {
             let mut v = vec![Setting::new(
                 "cholesky",
                 vec![("/solver", json!({"kind": "cholesky"}))],
             )];
+            // The reused factor differs from `cholesky` only on a system above the
+            // dense path's size: a monolithic scene with that many links (the nodes of
+            // a partitioned scene are below it).
+            if s.partition.is_none() && s.links.len() > DENSE_MAX_LINKS {
+                v.push(Setting::new(
+                    "cholesky_pcg",
+                    vec![("/solver", json!({"kind": "cholesky_pcg"}))],
+                ));
+            }
             v.extend(CG_BUDGETS.iter().map(|&n| {
                 Setting::new(
                     format!("cg {n}"),
@@ -475,6 +485,35 @@ mod tests {
                 (setting.label.clone(), s)
             })
             .collect()
+    }
+
+    /// The labels of the solver knob's settings on a grid of `rows × rows` bodies,
+    /// monolithic or on quadrant nodes.
+    fn solver_labels(rows: usize, quadrants: bool) -> Vec<String> {
+        let mut v = json!({
+            "name": "s", "duration": 0.1, "dt": 0.001,
+            "model": {"grid": {"rows": rows, "cols": rows, "spacing": 1.8, "mass": 1.0, "size": 0.2}},
+        });
+        if quadrants {
+            v["partition"] = json!({"quadrants": true});
+            v["channels"] = json!([
+                {"name": "tau1", "tau": 0.005, "borders": [[1, 2], [1, 4]]},
+                {"name": "tau2", "tau": 0.005, "borders": [[2, 3], [3, 4]]}
+            ]);
+        }
+        let s = parse_str(&v.to_string(), "grid").expect("valid grid");
+        let knob = KNOBS.iter().find(|k| k.name == "solver").expect("knob");
+        (knob.settings)(&s).into_iter().map(|s| s.label).collect()
+    }
+
+    #[test]
+    fn the_reused_factor_is_offered_where_it_differs_from_cholesky() {
+        // 4×4: 24 links, dense; 8×8: 112 links, sparse; 8×8 on 4 nodes: 24 links each
+        // (and the border links), dense.
+        let pcg = |labels: Vec<String>| labels.iter().any(|l| l == "cholesky_pcg");
+        assert!(!pcg(solver_labels(4, false)));
+        assert!(pcg(solver_labels(8, false)));
+        assert!(!pcg(solver_labels(8, true)));
     }
 
     fn tdma(s: &Scenario) -> &crate::scenario::model::TdmaSpec {

@@ -117,6 +117,21 @@ fn sparse_solver_run_resumes_bit_for_bit() {
 }
 
 #[test]
+fn a_reused_factor_resumes_bit_for_bit() {
+    // The same grid on `cholesky_pcg`: with RK4's 4 solves per step and a factorization
+    // every 7 solves, both checkpoints (steps 400 and 800) fall between factorizations,
+    // so the restored run must rebuild the factor it was iterating with.
+    let v = json!({
+        "name": "grid64", "seed": 1, "duration": 1.0, "dt": 0.001, "integrator": "rk4",
+        "solver": {"kind": "cholesky_pcg", "refactor_every": 7},
+        "model": {"grid": {"rows": 8, "cols": 8, "spacing": 1.8, "mass": 1.0, "size": 0.2}},
+        "forces": [{"body": 1, "amplitude": [0, 0, 20], "omega": 2.0}],
+        "output": {"decimation": 50}
+    });
+    check_resume("pcg", &v, 0.4, 2);
+}
+
+#[test]
 fn partitioned_fixed_delay_run_resumes_with_messages_in_flight() {
     let mut v = shipped("grid16_space_fixed");
     v["duration"] = json!(4.0);

@@ -11,6 +11,7 @@ use dsmcosim::scenario::file::{
     OutputFile, PartitionFile, ScenarioFile, SolverFile, SolverKind, StabilizerFile,
     StabilizerKind,
 };
+use dsmcosim::scenario::model::Solver;
 use dsmcosim::scenario::validate::{parse_file, validate};
 use dsmcosim::scenario::{load, parse_str};
 use dsmcosim::Error;
@@ -539,6 +540,16 @@ fn stabilizer_and_solver_sections_are_checked() {
     invalid(set("/solver/max_iterations", json!(0)), "solver.max_iterations", "must be ≥ 1 (got 0)");
     invalid(set("/solver/tolerance", json!(-1e-9)), "solver.tolerance", "must be ≥ 0 (got -1e-9)");
     invalid(set("/solver", json!({"kind": "cholesky", "tolerance": 1e-6})), "solver.tolerance", "not a key of kind \"cholesky\"");
+    let pcg = |v: Value| set("/solver", v);
+    let s = parse_str(&pcg(json!({"kind": "cholesky_pcg"})), "p.json").unwrap();
+    assert_eq!(s.solver, Solver::CholeskyPcg { refactor_every: 20, tolerance: 1e-8, max_iterations: 10 });
+    invalid(pcg(json!({"kind": "cholesky_pcg", "refactor_every": 0})), "solver.refactor_every", "must be ≥ 1 (got 0)");
+    invalid(pcg(json!({"kind": "cholesky_pcg", "max_iterations": 0})), "solver.max_iterations", "must be ≥ 1 (got 0)");
+    invalid(pcg(json!({"kind": "cholesky_pcg", "tolerance": 0})), "solver.tolerance", "must be in (0, 1) for cholesky_pcg (got 0)");
+    invalid(pcg(json!({"kind": "cholesky_pcg", "tolerance": 1})), "solver.tolerance", "must be in (0, 1) for cholesky_pcg (got 1)");
+    invalid(pcg(json!({"kind": "cholesky_pcg", "refactor_every": -3})), "solver.refactor_every", "invalid value");
+    invalid(pcg(json!({"kind": "cholesky", "refactor_every": 5})), "solver.refactor_every", "not a key of kind \"cholesky\"");
+    invalid(pcg(json!({"kind": "cg", "refactor_every": 5})), "solver.refactor_every", "not a key of kind \"cg\"");
 }
 
 #[test]
@@ -790,6 +801,18 @@ fn solver() -> impl Strategy<Value = SolverFile> {
         )
             .prop_map(|(max_iterations, tolerance)| SolverFile {
                 kind: SolverKind::Cg,
+                max_iterations,
+                tolerance,
+                refactor_every: None,
+            }),
+        (
+            prop::option::of(1usize..500),
+            prop::option::of(1usize..100),
+            prop::option::of(decimal(1, 100, 1e12))
+        )
+            .prop_map(|(refactor_every, max_iterations, tolerance)| SolverFile {
+                kind: SolverKind::CholeskyPcg,
+                refactor_every,
                 max_iterations,
                 tolerance,
             }),

@@ -22,7 +22,8 @@ use std::sync::Arc;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw,
+    factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky,
+    SymbolicCholeskyRaw,
 };
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
@@ -46,7 +47,8 @@ impl std::fmt::Debug for Ordered {
 }
 
 /// An ordered factorization held by a solver. A clone (a fork of the world) shares the
-/// analysis and gets buffers of its own; a solver restored from a checkpoint starts
+/// analysis and gets buffers of its own, holding a copy of the factor (a solver that
+/// reuses its factor continues from it); a solver restored from a checkpoint starts
 /// empty and analyses the pattern again on its first solve: the same AMD order, so the
 /// same bits.
 #[derive(Debug, Default)]
@@ -54,12 +56,24 @@ pub(super) struct Slot(pub(super) Option<Ordered>);
 
 impl Clone for Slot {
     fn clone(&self) -> Slot {
-        Slot(
-            self.0
-                .as_ref()
-                .and_then(|o| Ordered::with(Arc::clone(&o.symbolic))),
-        )
+        Slot(self.0.as_ref().and_then(|o| {
+            let mut copy = Ordered::with(Arc::clone(&o.symbolic))?;
+            // A solver that reuses its factor must fork with it.
+            copy.l_values.copy_from_slice(&o.l_values);
+            Some(copy)
+        }))
     }
+}
+
+/// Which layout a factor takes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Layout {
+    /// Simplicial below [`SUPERNODAL_MIN_LINKS`], supernodal from there: the faster
+    /// factorization.
+    BySize,
+    /// Always simplicial: the faster triangular solves with one right-hand side, for a
+    /// factor that is applied many times per factorization.
+    Simplicial,
 }
 
 /// Systems of at least this many links are factorized supernodally, smaller ones
@@ -68,10 +82,15 @@ pub(super) const SUPERNODAL_MIN_LINKS: usize = 1000;
 
 /// The symbolic analysis of the lower triangle `(col_ptr, row_idx)` (sorted rows) of an
 /// `n × n` symmetric pattern: AMD order, then the simplicial or supernodal structure.
-fn analyse(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Option<SymbolicCholesky<usize>> {
+fn analyse(
+    n: usize,
+    col_ptr: &[usize],
+    row_idx: &[usize],
+    layout: Layout,
+) -> Option<SymbolicCholesky<usize>> {
     let a = SymbolicSparseColMatRef::new_checked(n, n, col_ptr, None, row_idx);
     let params = CholeskySymbolicParams {
-        supernodal_flop_ratio_threshold: if n >= SUPERNODAL_MIN_LINKS {
+        supernodal_flop_ratio_threshold: if layout == Layout::BySize && n >= SUPERNODAL_MIN_LINKS {
             SupernodalThreshold::FORCE_SUPERNODAL
         } else {
             SupernodalThreshold::FORCE_SIMPLICIAL
@@ -84,14 +103,19 @@ fn analyse(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Option<SymbolicCho
 /// Entries of the factor of the lower triangle `(col_ptr, row_idx)` of an `n × n`
 /// pattern; `None` if faer refuses the pattern.
 pub(super) fn factor_entries(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Option<u64> {
-    analyse(n, col_ptr, row_idx).map(|s| s.len_val() as u64)
+    analyse(n, col_ptr, row_idx, Layout::BySize).map(|s| s.len_val() as u64)
 }
 
 impl Ordered {
     /// The symbolic analysis of the lower triangle `(col_ptr, row_idx)` (sorted rows) of
     /// an `n × n` symmetric pattern; `None` if faer refuses it.
-    pub(super) fn new(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Option<Ordered> {
-        Ordered::with(Arc::new(analyse(n, col_ptr, row_idx)?))
+    pub(super) fn new(
+        n: usize,
+        col_ptr: &[usize],
+        row_idx: &[usize],
+        layout: Layout,
+    ) -> Option<Ordered> {
+        Ordered::with(Arc::new(analyse(n, col_ptr, row_idx, layout)?))
     }
 
     /// The factorization of an analysed pattern, with buffers of its own.
@@ -114,16 +138,30 @@ impl Ordered {
     /// `A x = b`. `false` if `A` is not numerically positive definite: a pivot of the
     /// factorization (before its square root) at or below `min_pivot`, or a non-finite
     /// solution.
-    #[allow(clippy::too_many_arguments)] // one call site; the pattern is the caller's
     pub(super) fn solve(
         &mut self,
-        n: usize,
-        col_ptr: &[usize],
-        row_idx: &[usize],
+        (n, col_ptr, row_idx): (usize, &[usize], &[usize]),
         values: &[f64],
         min_pivot: f64,
         b: &[f64],
         x: &mut [f64],
+    ) -> bool {
+        if !self.factorize((n, col_ptr, row_idx), values, min_pivot) {
+            return false;
+        }
+        x.copy_from_slice(b);
+        self.apply_inverse(x);
+        x.iter().all(|v| v.is_finite())
+    }
+
+    /// Factorizes the matrix with these `values` into the stored factor. `false` if a
+    /// pivot (before its square root) is at or below `min_pivot` or faer finds `A` not
+    /// positive definite.
+    pub(super) fn factorize(
+        &mut self,
+        (n, col_ptr, row_idx): (usize, &[usize], &[usize]),
+        values: &[f64],
+        min_pivot: f64,
     ) -> bool {
         let a = SparseColMatRef::new(
             SymbolicSparseColMatRef::new_checked(n, n, col_ptr, None, row_idx),
@@ -133,18 +171,25 @@ impl Ordered {
             dynamic_regularization_delta: 0.0,
             dynamic_regularization_epsilon: 0.0,
         };
-        let Ok(llt) = self.symbolic.factorize_numeric_llt(
-            &mut self.l_values,
-            a,
-            Side::Lower,
-            regularization,
-            Par::Seq,
-            MemStack::new(&mut self.factor_scratch),
-            Default::default(),
-        ) else {
-            return false;
-        };
-        x.copy_from_slice(b);
+        let factored = self
+            .symbolic
+            .factorize_numeric_llt(
+                &mut self.l_values,
+                a,
+                Side::Lower,
+                regularization,
+                Par::Seq,
+                MemStack::new(&mut self.factor_scratch),
+                Default::default(),
+            )
+            .is_ok();
+        factored && self.min_pivot_squared() > min_pivot
+    }
+
+    /// `x ← (L Lᵀ)⁻¹ x` with the stored factor (of the last [`factorize`](Self::factorize)).
+    pub(super) fn apply_inverse(&mut self, x: &mut [f64]) {
+        let n = x.len();
+        let llt = LltRef::new(&self.symbolic, &self.l_values);
         let rhs = MatMut::from_column_major_slice_mut(x, n, 1);
         llt.solve_in_place_with_conj(
             Conj::No,
@@ -152,7 +197,6 @@ impl Ordered {
             Par::Seq,
             MemStack::new(&mut self.solve_scratch),
         );
-        self.min_pivot_squared() > min_pivot && x.iter().all(|v| v.is_finite())
     }
 
     /// The smallest squared diagonal entry of the factor `L` (the pivots of the
