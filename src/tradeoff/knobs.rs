@@ -491,7 +491,7 @@ mod tests {
     /// monolithic or on quadrant nodes.
     fn solver_labels(rows: usize, quadrants: bool) -> Vec<String> {
         let mut v = json!({
-            "name": "s", "duration": 0.1, "dt": 0.001,
+            "name": "s", "seed": 1, "duration": 0.1, "dt": 0.001,
             "model": {"grid": {"rows": rows, "cols": rows, "spacing": 1.8, "mass": 1.0, "size": 0.2}},
         });
         if quadrants {
