@@ -34,6 +34,18 @@ pub const CG_BUDGETS: [usize; 4] = [2, 5, 10, 40];
 /// Baumgarte coefficients α = β [1/s] of the comparison stabilizer.
 pub const BAUMGARTE: [f64; 3] = [5.0, 20.0, 50.0];
 
+/// The most links a node owns (all of them on a monolithic scene).
+fn largest_node_links(s: &Scenario) -> usize {
+    let Some(p) = &s.partition else {
+        return s.links.len();
+    };
+    let mut per_node = vec![0usize; p.nodes];
+    for &n in &p.link_owner {
+        per_node[n] += 1;
+    }
+    per_node.into_iter().max().unwrap_or(0)
+}
+
 /// One accuracy knob.
 pub struct Knob {
     /// Name in the tables and the plot legend.
@@ -312,10 +324,9 @@ pub const KNOBS: &[Knob] = &[
                 "cholesky",
                 vec![("/solver", json!({"kind": "cholesky"}))],
             )];
-            // The reused factor differs from `cholesky` only on a system above the
-            // dense path's size: a monolithic scene with that many links (the nodes of
-            // a partitioned scene are below it).
-            if s.partition.is_none() && s.links.len() > DENSE_MAX_LINKS {
+            // The reused factor differs from `cholesky` only on a node whose system is
+            // above the dense path's size.
+            if largest_node_links(s) > DENSE_MAX_LINKS {
                 v.push(Setting::new(
                     "cholesky_pcg",
                     vec![("/solver", json!({"kind": "cholesky_pcg"}))],
@@ -488,32 +499,33 @@ mod tests {
     }
 
     /// The labels of the solver knob's settings on a grid of `rows × rows` bodies,
-    /// monolithic or on quadrant nodes.
+    /// monolithic or on 2×2-body quadrant nodes.
     fn solver_labels(rows: usize, quadrants: bool) -> Vec<String> {
-        let mut v = json!({
-            "name": "s", "seed": 1, "duration": 0.1, "dt": 0.001,
-            "model": {"grid": {"rows": rows, "cols": rows, "spacing": 1.8, "mass": 1.0, "size": 0.2}},
-        });
-        if quadrants {
-            v["partition"] = json!({"quadrants": true});
-            v["channels"] = json!([
-                {"name": "tau1", "tau": 0.005, "borders": [[1, 2], [1, 4]]},
-                {"name": "tau2", "tau": 0.005, "borders": [[2, 3], [3, 4]]}
-            ]);
+        let s = if quadrants {
+            let mut v = thesis_4_node();
+            v["model"]["grid"]["rows"] = json!(rows);
+            v["model"]["grid"]["cols"] = json!(rows);
+            parse_str(&v.to_string(), "quadrants")
+        } else {
+            let v = json!({
+                "name": "s", "seed": 1, "duration": 0.1, "dt": 0.001,
+                "model": {"grid": {"rows": rows, "cols": rows, "spacing": 1.8, "mass": 1.0, "size": 0.2}},
+            });
+            parse_str(&v.to_string(), "grid")
         }
-        let s = parse_str(&v.to_string(), "grid").expect("valid grid");
+        .expect("valid grid");
         let knob = KNOBS.iter().find(|k| k.name == "solver").expect("knob");
         (knob.settings)(&s).into_iter().map(|s| s.label).collect()
     }
 
     #[test]
     fn the_reused_factor_is_offered_where_it_differs_from_cholesky() {
-        // 4×4: 24 links, dense; 8×8: 112 links, sparse; 8×8 on 4 nodes: 24 links each
-        // (and the border links), dense.
+        // 4×4: 24 links, dense; 8×8: 112 links, sparse; the thesis's 4 nodes: at most
+        // 8 links each, dense.
         let pcg = |labels: Vec<String>| labels.iter().any(|l| l == "cholesky_pcg");
         assert!(!pcg(solver_labels(4, false)));
         assert!(pcg(solver_labels(8, false)));
-        assert!(!pcg(solver_labels(8, true)));
+        assert!(!pcg(solver_labels(4, true)));
     }
 
     fn tdma(s: &Scenario) -> &crate::scenario::model::TdmaSpec {
