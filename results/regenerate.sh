@@ -83,6 +83,7 @@ if [ $studies -eq 1 ]; then
   study results/tradeoff/grid16_space_fixed tradeoff scenarios/grid16_space_fixed.json --duration 3
   study results/tradeoff/tdma4_space_fixed_hold tradeoff scenarios/tdma4_space_fixed_hold.json --duration 3
   study results/tradeoff/grid16_rk4 tradeoff scenarios/grid16_rk4.json --duration 3
+  study results/tradeoff/grid64_tight_1s tradeoff scenarios/grid64_tight.json --duration 1
   study results/stability stability-map scenarios/grid16_monolithic.json --duration 12
   study results/coupling coupling scenarios/grid16_space_fixed.json
   # The D_s sweeps (results/README.md, "Does optimizing pay?"): rerun from scratch; the
