@@ -6,7 +6,7 @@
 //! ```text
 //! cargo run --release --manifest-path benches/rapier/Cargo.toml -- [--grids 16,32,64,128]
 //!     [--classes loose,tight] [--steps N] [--joint distance|rope] [--substeps N]
-//!     [--loose-substeps N] [--warmstart-joints] [--max-substeps N]
+//!     [--loose-substeps N] [--warmstart-joints] [--max-substeps N] [--tight-exact]
 //! ```
 //!
 //! This crate is its own workspace (see its Cargo.toml), so the main crate's tests,
@@ -24,7 +24,9 @@
 //! - `loose`: the thesis defaults (explicit Euler, SMC μ 50 ms, K 10 m/s, ε 0.1 m) with
 //!   CG 10 (`{"kind": "cg", "max_iterations": 10, "tolerance": 0}`);
 //! - `tight`: the settings of `scenarios/grid64_tight.json` (RK4, SMC μ 2 ms, K 200 m/s,
-//!   ε 0.1 m, `cholesky`), at every grid size.
+//!   ε 0.1 m, `cholesky_pcg`: the exact solve's factor reused for 20 solves, CG
+//!   preconditioned by it to 1e-8 between), at every grid size; `--tight-exact` runs
+//!   it on `cholesky` (a factorization every solve) instead.
 //!
 //! Rapier at the same dt: `loose` runs its default integration parameters (4 substeps,
 //! 1 PGS iteration per substep); `tight` searches the fewest substeps
@@ -108,7 +110,8 @@ impl Class {
             Class::Tight => json!({
                 "integrator": "rk4",
                 "stabilizer": {"kind": "smc", "mu": 0.002, "k": 200.0, "epsilon": 0.1},
-                "solver": {"kind": "cholesky"},
+                "solver": {"kind": "cholesky_pcg", "refactor_every": 20, "tolerance": 1e-8,
+                           "max_iterations": 10},
             }),
         }
     }
@@ -116,7 +119,7 @@ impl Class {
     fn dsm_label(self) -> &'static str {
         match self {
             Class::Loose => "Euler, SMC μ 50 ms K 10, CG 10",
-            Class::Tight => "RK4, SMC μ 2 ms K 200, cholesky",
+            Class::Tight => "RK4, SMC μ 2 ms K 200, cholesky_pcg",
         }
     }
 }
@@ -182,7 +185,7 @@ impl Measured {
 }
 
 /// The validated scenario of an `n`×`n` grid run for `steps` steps in `class`.
-fn scenario(n: usize, class: Class, steps: u64) -> Scenario {
+fn scenario(n: usize, class: Class, steps: u64, tight_exact: bool) -> Scenario {
     let mut v = json!({
         "name": format!("rapier_{}_{n}", class.name()),
         "seed": 1,
@@ -196,6 +199,9 @@ fn scenario(n: usize, class: Class, steps: u64) -> Scenario {
     });
     for (k, val) in class.dsm_settings().as_object().expect("object") {
         v[k] = val.clone();
+    }
+    if tight_exact && class == Class::Tight {
+        v["solver"] = json!({"kind": "cholesky"});
     }
     parse_str(&v.to_string(), "rapier bench").expect("valid bench scenario")
 }
@@ -463,6 +469,8 @@ struct Args {
     loose_substeps: Option<usize>,
     warmstart_joints: bool,
     max_substeps: usize,
+    /// The tight class on `cholesky` (factorized every solve) instead of `cholesky_pcg`.
+    tight_exact: bool,
 }
 
 fn parse_args() -> Result<Args, String> {
@@ -475,6 +483,7 @@ fn parse_args() -> Result<Args, String> {
         loose_substeps: None,
         warmstart_joints: false,
         max_substeps: 1024,
+        tight_exact: false,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -504,11 +513,13 @@ fn parse_args() -> Result<Args, String> {
             "--loose-substeps" => a.loose_substeps = Some(num(&value()?)?),
             "--warmstart-joints" => a.warmstart_joints = true,
             "--max-substeps" => a.max_substeps = num(&value()?)?,
+            "--tight-exact" => a.tight_exact = true,
             "-h" | "--help" => {
                 println!(
                     "usage: rapier-bench [--grids 16,32,64,128] [--classes loose,tight] \
                      [--steps N] [--joint distance|rope] [--substeps N] \
-                     [--loose-substeps N] [--warmstart-joints] [--max-substeps N]"
+                     [--loose-substeps N] [--warmstart-joints] [--max-substeps N] \
+                     [--tight-exact]"
                 );
                 std::process::exit(0);
             }
@@ -554,7 +565,7 @@ fn main() {
     for &n in &args.grids {
         let steps = args.steps.unwrap_or_else(|| default_steps(n));
         for &class in &args.classes {
-            let s = scenario(n, class, steps);
+            let s = scenario(n, class, steps, args.tight_exact);
             eprintln!(
                 "{n}×{n} {}: {} bodies, {} links, {steps} steps",
                 class.name(),
@@ -595,7 +606,11 @@ fn main() {
             let row = format!(
                 "| {n}×{n} | {steps} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                 class.name(),
-                class.dsm_label(),
+                if args.tight_exact && class == Class::Tight {
+                    "RK4, SMC μ 2 ms K 200, cholesky"
+                } else {
+                    class.dsm_label()
+                },
                 dsm.as_ref().map_or("failed".into(), |m| sci(m.max_w)),
                 dsm.as_ref().map_or("—".into(), |m| rate(m.rate())),
                 set.label(),
