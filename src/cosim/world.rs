@@ -747,6 +747,9 @@ impl CoSim {
         // on any thread, and the first error is the lowest node's.
         if parallel {
             begin_parallel(&mut self.nodes, t)
+        } else if let [node] = &mut self.nodes[..] {
+            // Monolithic: no border to prepare, nothing to batch.
+            node.system.begin_step(t, &node.state).map_err(|e| (0, e))
         } else {
             for node in &mut self.nodes {
                 node.prepare_step(t);
@@ -790,6 +793,18 @@ impl CoSim {
 
     /// Copies each link's and body's values from the node that owns it.
     fn gather(&mut self) {
+        // A monolithic world's one node holds every link and body at its own index
+        // (no ghosts, no lines): plain slice copies, as bare integrator steps would
+        // make them.
+        if let [node] = &self.nodes[..] {
+            self.w.copy_from_slice(node.system.violations());
+            for (l, f) in self.f.iter_mut().enumerate() {
+                *f = node.system.tension(&node.state, l);
+            }
+            self.p.copy_from_slice(&node.state.p);
+            self.v.copy_from_slice(&node.state.v);
+            return;
+        }
         for l in 0..self.w.len() {
             (self.w[l], self.f[l]) = link_values(
                 &self.nodes,
