@@ -467,7 +467,7 @@ pub fn exact_factor_entries(bodies: usize, ends: &[(usize, usize)]) -> Option<u6
         return Some((m * m) as u64);
     }
     let (col_ptr, row_idx, _) = lower_pattern(m, &incident_links(bodies, ends));
-    ordered::factor_entries(m, &col_ptr, &row_idx)
+    ordered::factor_entries(m, &col_ptr, &row_idx, ordered::Layout::BySize)
 }
 
 /// Solves `A x = b` for symmetric positive definite `A` (row-major, `m × m`, only the
@@ -988,5 +988,36 @@ mod tests {
 
     fn ends_of(m: usize) -> Vec<(usize, usize)> {
         chain(m).0.ends
+    }
+
+    #[test]
+    fn the_simplicial_factor_of_cholesky_pcg_is_no_larger_than_the_estimated_one() {
+        // A 40×40 grid (3120 links): supernodal under `cholesky`, which the memory
+        // estimate counts; `cholesky_pcg` keeps the simplicial factor.
+        let (rows, cols) = (40, 40);
+        let mut ends = Vec::new();
+        for r in 0..rows {
+            for c in 0..cols {
+                let i = r * cols + c;
+                if c + 1 < cols {
+                    ends.push((i, i + 1));
+                }
+                if r + 1 < rows {
+                    ends.push((i, i + cols));
+                }
+            }
+        }
+        let m = ends.len();
+        let (col_ptr, row_idx, _) = lower_pattern(m, &incident_links(rows * cols, &ends));
+        let count = |layout| ordered::factor_entries(m, &col_ptr, &row_idx, layout).unwrap();
+        let (simplicial, estimated) = (
+            count(ordered::Layout::Simplicial),
+            count(ordered::Layout::BySize),
+        );
+        assert_eq!(Some(estimated), exact_factor_entries(rows * cols, &ends));
+        assert!(
+            simplicial <= estimated,
+            "{simplicial} > {estimated} entries"
+        );
     }
 }

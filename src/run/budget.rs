@@ -103,6 +103,9 @@ impl Estimate {
         let checkpoints = checkpoint_every
             .filter(|e| e.0 > 0)
             .map_or(0, |e| scenario.duration.0 / e.0);
+        // `cholesky_pcg` keeps a simplicial factor, whose entries are the pattern's
+        // true fill: at most the supernodal layout's (which stores its blocks dense)
+        // that `factor_entries` counts above 1000 links, so the estimate bounds it.
         let exact = matches!(
             scenario.solver,
             crate::scenario::model::Solver::Cholesky

@@ -102,8 +102,13 @@ fn analyse(
 
 /// Entries of the factor of the lower triangle `(col_ptr, row_idx)` of an `n × n`
 /// pattern; `None` if faer refuses the pattern.
-pub(super) fn factor_entries(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Option<u64> {
-    analyse(n, col_ptr, row_idx, Layout::BySize).map(|s| s.len_val() as u64)
+pub(super) fn factor_entries(
+    n: usize,
+    col_ptr: &[usize],
+    row_idx: &[usize],
+    layout: Layout,
+) -> Option<u64> {
+    analyse(n, col_ptr, row_idx, layout).map(|s| s.len_val() as u64)
 }
 
 impl Ordered {
