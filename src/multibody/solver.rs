@@ -1020,4 +1020,20 @@ mod tests {
             "{simplicial} > {estimated} entries"
         );
     }
+
+    #[test]
+    fn a_zero_right_hand_side_keeps_the_factor_and_solves_to_zero() {
+        // A scene at rest: `b = 0` after the first solve must not force a
+        // factorization (no relative residual can be met), and its solution is zero.
+        let m = DENSE_MAX_LINKS + 40;
+        let (geo, mass) = chain(m);
+        let mut s = JsSolver::new(pcg(4, 1e-10, 10), m + 1, &geo.ends);
+        let mut x = vec![0.0; m];
+        s.solve(&geo, &mass, &vec![1.0; m], &mut x).unwrap();
+        for _ in 0..3 {
+            s.solve(&geo, &mass, &vec![0.0; m], &mut x).unwrap();
+            assert!(x.iter().all(|&v| v == 0.0), "{x:?}");
+        }
+        assert_eq!(s.factorizations(), Some(1));
+    }
 }

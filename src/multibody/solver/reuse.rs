@@ -114,7 +114,16 @@ impl Reuse {
         b: &[f64],
         x: &mut [f64],
     ) -> bool {
-        let goal = self.tolerance * dot(b, b).sqrt();
+        let norm_b = dot(b, b).sqrt();
+        if norm_b == 0.0 {
+            // `A` is positive definite: the solution is zero (a scene at rest), which no
+            // relative residual could confirm.
+            x.fill(0.0);
+            self.since += 1;
+            self.last_iterations = 0;
+            return true;
+        }
+        let goal = self.tolerance * norm_b;
         symmetric_product(col_ptr, row_idx, values, x, &mut self.ap);
         for ((r, &b), &ax) in self.r.iter_mut().zip(b).zip(&self.ap) {
             *r = b - ax;
