@@ -11,10 +11,11 @@
 //!   dense in-place path and on the ordered sparse path (faer, AMD, supernodal), for
 //!   n = 3…16 (12…480 links). The report names the smallest m where the sparse path
 //!   wins, what [`DENSE_MAX_LINKS`] is set from.
-//! - `growth_{n}/cg10` and `…/exact`: one explicit-Euler SMC step of a monolithic n×n
-//!   grid of rigid bodies (warmed up 20 steps, then continuing its trajectory, restarted
-//!   from the warm state every 1000 steps) with CG 10 (tolerance 0) or the exact solve,
-//!   n = 16…256. The report fits the exponent `p` of `time ∝ bodies^p` by least squares
+//! - `growth_{n}/cg10`, `…/exact` and `…/pcg`: one explicit-Euler SMC step of a
+//!   monolithic n×n grid of rigid bodies (warmed up 20 steps, then continuing its
+//!   trajectory, restarted from the warm state every 1000 steps) with CG 10 (tolerance
+//!   0), the exact solve, or the exact factor reused (`cholesky_pcg`, its defaults: a
+//!   factorization every 20 solves, so every 20 Euler steps), n = 16…256. The report fits the exponent `p` of `time ∝ bodies^p` by least squares
 //!   on the logs, for each path.
 mod common;
 
@@ -109,9 +110,10 @@ fn growth(c: &mut Criterion) {
     g.warm_up_time(Duration::from_secs(1));
     let cg10 = json!({"kind": "cg", "max_iterations": 10, "tolerance": 0.0});
     let exact = json!({"kind": "cholesky"});
+    let reused = json!({"kind": "cholesky_pcg"});
     for n in GROWTH {
         g.throughput(Throughput::Elements((n * n) as u64));
-        for (name, solver) in [("cg10", &cg10), ("exact", &exact)] {
+        for (name, solver) in [("cg10", &cg10), ("exact", &exact), ("pcg", &reused)] {
             let mut setup = None;
             g.bench_function(BenchmarkId::new(format!("growth_{n}"), name), |bench| {
                 // Built inside the closure: criterion calls it only when the filter
@@ -168,61 +170,71 @@ fn report(since: SystemTime) {
     }
 
     println!("\nGrowth (one step, rigid bodies, explicit Euler, SMC):");
-    println!("| grid | bodies | CG 10 | exact | exact ÷ CG 10 |");
-    println!("|---|---|---|---|---|");
-    let (mut cg, mut exact) = (Vec::new(), Vec::new());
-    let mut csv = String::from("grid,bodies,cg10_seconds_per_step,exact_seconds_per_step\n");
+    println!("| grid | bodies | CG 10 | exact | exact ÷ CG 10 | reused factor | reused ÷ CG 10 |");
+    println!("|---|---|---|---|---|---|---|");
+    let mut points: [Vec<(f64, f64)>; 3] = Default::default();
+    let mut csv = String::from(
+        "grid,bodies,cg10_seconds_per_step,exact_seconds_per_step,pcg_seconds_per_step\n",
+    );
     for n in GROWTH {
         let bodies = (n * n) as f64;
-        let c = median(format!("growth_{n}/cg10"));
-        let e = median(format!("growth_{n}/exact"));
+        let [c, e, r] = SERIES.map(|(case, _)| median(format!("growth_{n}/{case}")));
         let cell = |v: Option<f64>| v.map_or("—".into(), |v| format!("{:.3} ms", v / 1e6));
+        let ratio = |v: Option<f64>| v.map_or("—".into(), |v| common::times(v, c));
         println!(
-            "| {n}×{n} | {} | {} | {} | {} |",
+            "| {n}×{n} | {} | {} | {} | {} | {} | {} |",
             n * n,
             cell(c),
             cell(e),
-            e.map_or("—".into(), |e| common::times(e, c))
+            ratio(e),
+            cell(r),
+            ratio(r)
         );
         let secs = |v: Option<f64>| v.map_or(String::new(), |v| format!("{:e}", v / 1e9));
-        csv.push_str(&format!("{n},{},{},{}\n", n * n, secs(c), secs(e)));
-        cg.extend(c.map(|c| (bodies, c / 1e9)));
-        exact.extend(e.map(|e| (bodies, e / 1e9)));
+        csv.push_str(&format!(
+            "{n},{},{},{},{}\n",
+            n * n,
+            secs(c),
+            secs(e),
+            secs(r)
+        ));
+        for (p, v) in points.iter_mut().zip([c, e, r]) {
+            p.extend(v.map(|v| (bodies, v / 1e9)));
+        }
     }
-    let fit = |p: &[(f64, f64)]| (p.len() >= 2).then(|| exponent(p));
-    let (p_cg, p_exact) = (fit(&cg), fit(&exact));
-    if let Some(p) = p_cg {
-        println!("CG 10: time ∝ bodies^{p:.3}");
+    let fits = points
+        .each_ref()
+        .map(|p| (p.len() >= 2).then(|| exponent(p)));
+    for ((_, label), fit) in SERIES.iter().zip(&fits) {
+        if let Some(p) = fit {
+            println!("{label}: time ∝ bodies^{p:.3}");
+        }
     }
-    if let Some(p) = p_exact {
-        println!("exact: time ∝ bodies^{p:.3}");
-    }
-    if let (Some(dir), Some(p_cg), Some(p_exact)) = (
-        std::env::var_os("GROWTH_OUT").map(PathBuf::from),
-        p_cg,
-        p_exact,
-    ) {
-        write_growth(&dir, &csv, &cg, &exact, p_cg, p_exact);
+    if let (Some(dir), [Some(a), Some(b), Some(c)]) =
+        (std::env::var_os("GROWTH_OUT").map(PathBuf::from), fits)
+    {
+        write_growth(&dir, &csv, &points, [a, b, c]);
     }
 }
 
-fn write_growth(
-    dir: &std::path::Path,
-    csv: &str,
-    cg: &[(f64, f64)],
-    exact: &[(f64, f64)],
-    p_cg: f64,
-    p_exact: f64,
-) {
+/// The growth bench's solvers: (case name, label).
+const SERIES: [(&str, &str); 3] = [
+    ("cg10", "CG 10"),
+    ("exact", "exact, AMD-ordered Cholesky"),
+    ("pcg", "exact factor reused (cholesky_pcg)"),
+];
+
+fn write_growth(dir: &std::path::Path, csv: &str, points: &[Vec<(f64, f64)>; 3], fits: [f64; 3]) {
     std::fs::create_dir_all(dir).expect("GROWTH_OUT directory");
     dsmcosim::output::write_atomic(&dir.join("growth.csv"), csv.as_bytes()).expect("growth.csv");
-    let series = [
-        Series::new(format!("CG 10 (fit: bodies^{p_cg:.2})"), cg.to_vec()),
-        Series::new(
-            format!("exact, AMD-ordered Cholesky (fit: bodies^{p_exact:.2})"),
-            exact.to_vec(),
-        ),
-    ];
+    let series: Vec<Series> = SERIES
+        .iter()
+        .zip(points)
+        .zip(fits)
+        .map(|(((_, label), p), fit)| {
+            Series::new(format!("{label} (fit: bodies^{fit:.2})"), p.clone())
+        })
+        .collect();
     let mut plot = LinePlot::new(
         "Cost of one step against grid size (monolithic grids, rigid bodies, Euler + SMC)",
         "bodies",
