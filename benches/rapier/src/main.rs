@@ -7,6 +7,7 @@
 //! cargo run --release --manifest-path benches/rapier/Cargo.toml -- [--grids 16,32,64,128]
 //!     [--classes loose,tight] [--steps N] [--joint distance|rope] [--substeps N]
 //!     [--loose-substeps N] [--warmstart-joints] [--max-substeps N] [--tight-exact]
+//!     [--reference-only] [--repeats R]
 //! ```
 //!
 //! This crate is its own workspace (see its Cargo.toml), so the main crate's tests,
@@ -20,22 +21,31 @@
 //! bodies (mass, principal inertia, position), the same links (body pair, anchors, rest
 //! length) and the same force law, so the two cannot drift apart.
 //!
-//! **The accuracy classes.** dsmcosim at dt = 1 ms:
-//! - `loose`: the thesis defaults (explicit Euler, SMC μ 50 ms, K 10 m/s, ε 0.1 m) with
-//!   CG 10 (`{"kind": "cg", "max_iterations": 10, "tolerance": 0}`);
-//! - `tight`: the settings of `scenarios/grid64_tight.json` (RK4, SMC μ 2 ms, K 200 m/s,
-//!   ε 0.1 m, `cholesky_pcg`: the exact solve's factor reused for 20 solves, CG
-//!   preconditioned by it to 1e-8 between), at every grid size; `--tight-exact` runs
-//!   it on `cholesky` (a factorization every solve) instead.
+//! **The accuracy classes.** Each class has a reference setting of dsmcosim (dt = 1 ms),
+//! whose max |w| on a grid is the accuracy both engines must meet there; each engine
+//! then runs its cheapest setting that meets it:
+//! - `loose`: the reference is the thesis defaults (explicit Euler, SMC μ 50 ms,
+//!   K 10 m/s, ε 0.1 m) with CG 10 (`{"kind": "cg", "max_iterations": 10, "tolerance":
+//!   0}`); dsmcosim may also run CG 5 or CG 3 (the law, not the solve, sets how loose
+//!   the links are). Rapier gets two rows: its default integration parameters (4
+//!   substeps, 1 PGS iteration per substep), and the fewest substeps that still meet
+//!   the target (its defaults hold the links three orders tighter than the target, so
+//!   this is its cheapest setting, 1 substep).
+//! - `tight`: the reference is `scenarios/grid64_tight.json`'s settings (RK4, SMC μ 2 ms,
+//!   K 200 m/s, ε 0.1 m, `cholesky_pcg`: the exact solve's factor reused for 20 solves,
+//!   CG preconditioned by it to 1e-8 between; `--tight-exact` runs it on `cholesky`, a
+//!   factorization every solve); dsmcosim may also run RK4 with Baumgarte stabilization
+//!   (α = β = 5 /s, exact multipliers) on `cholesky_pcg` to 1e-8 or 1e-6. Rapier runs
+//!   the fewest substeps (`num_solver_iterations`) at which its max |w| is at or below
+//!   the target ([`search_substeps`]), up to `--max-substeps` (if that is not enough,
+//!   the table shows the tightest run and its cost).
 //!
-//! Rapier at the same dt: `loose` runs its default integration parameters (4 substeps,
-//! 1 PGS iteration per substep); `tight` searches the fewest substeps
-//! (`num_solver_iterations`) at which its max |w| is at or below dsmcosim's tight max |w|
-//! on that grid ([`search_substeps`]), up to `--max-substeps` (if that is not enough, the
-//! table shows the tightest run and its cost).
-//! `--substeps N` skips the search; `--loose-substeps N` replaces Rapier's default 4
-//! substeps in the loose rows. Every run that the search tried is printed on stderr;
-//! the table times the last one.
+//! `--reference-only` runs dsmcosim's reference alone. `--substeps N` fixes Rapier's
+//! tight substeps (no search); `--loose-substeps N` fixes its loose ones. Every run is
+//! printed on stderr. The kept pair (dsmcosim's setting, each Rapier row's setting) is
+//! then timed `--repeats` times in all (default 3), the engines alternating, and the
+//! fastest timing of each counts: on a shared machine the fastest of a few runs is the
+//! least disturbed one.
 //!
 //! **The joint.** Rapier 0.36 has no two-sided distance joint. Its `RopeJoint` is a
 //! `GenericJoint` whose linear axes are coupled (one row along the anchor-to-anchor
@@ -99,29 +109,67 @@ impl Class {
         }
     }
 
-    /// dsmcosim's settings for this class, as scenario keys.
-    fn dsm_settings(self) -> Value {
+    /// dsmcosim's settings for this class. The first is the class's reference: its max
+    /// |w| on a grid is the accuracy both engines must meet there. The others are
+    /// cheaper ways dsmcosim may meet it; the bench times the cheapest that does (as it
+    /// takes Rapier's fewest substeps that do).
+    fn dsm_settings(self, tight_exact: bool) -> Vec<DsmSetting> {
         match self {
-            // The thesis defaults (integrator, stabilizer) with CG 10.
-            Class::Loose => json!({
-                "solver": {"kind": "cg", "max_iterations": 10, "tolerance": 0.0}
-            }),
-            // scenarios/grid64_tight.json's settings.
-            Class::Tight => json!({
-                "integrator": "rk4",
-                "stabilizer": {"kind": "smc", "mu": 0.002, "k": 200.0, "epsilon": 0.1},
-                "solver": {"kind": "cholesky_pcg", "refactor_every": 20, "tolerance": 1e-8,
-                           "max_iterations": 10},
-            }),
+            // The thesis defaults (explicit Euler, SMC μ 50 ms, K 10) with CG 10, and
+            // the same with smaller CG budgets: the law, not the solve, sets how loose
+            // these links are.
+            Class::Loose => [10, 5, 3]
+                .into_iter()
+                .map(|k| DsmSetting {
+                    label: format!("Euler, SMC μ 50 ms K 10, CG {k}"),
+                    keys: json!({
+                        "solver": {"kind": "cg", "max_iterations": k, "tolerance": 0.0}
+                    }),
+                })
+                .collect(),
+            Class::Tight => {
+                let reused = |tolerance: f64| {
+                    json!({"kind": "cholesky_pcg", "refactor_every": 20,
+                           "tolerance": tolerance, "max_iterations": 10})
+                };
+                // scenarios/grid64_tight.json's settings.
+                let smc = json!({"kind": "smc", "mu": 0.002, "k": 200.0, "epsilon": 0.1});
+                let reference = if tight_exact {
+                    DsmSetting {
+                        label: "RK4, SMC μ 2 ms K 200, cholesky".into(),
+                        keys: json!({"integrator": "rk4", "stabilizer": smc,
+                                     "solver": {"kind": "cholesky"}}),
+                    }
+                } else {
+                    DsmSetting {
+                        label: "RK4, SMC μ 2 ms K 200, cholesky_pcg".into(),
+                        keys: json!({"integrator": "rk4", "stabilizer": smc,
+                                     "solver": reused(1e-8)}),
+                    }
+                };
+                // Baumgarte with exact multipliers: the same four solves per RK4 step,
+                // no multipliers in the state, and (on these grids) links held far
+                // tighter; a looser PCG tolerance trades some of that for time.
+                let baumgarte = json!({"kind": "baumgarte", "alpha": 5.0, "beta": 5.0});
+                let mut all = vec![reference];
+                for (tol, name) in [(1e-8, "1e-8"), (1e-6, "1e-6")] {
+                    all.push(DsmSetting {
+                        label: format!("RK4, Baumgarte α = β = 5, cholesky_pcg to {name}"),
+                        keys: json!({"integrator": "rk4", "stabilizer": baumgarte,
+                                     "solver": reused(tol)}),
+                    });
+                }
+                all
+            }
         }
     }
+}
 
-    fn dsm_label(self) -> &'static str {
-        match self {
-            Class::Loose => "Euler, SMC μ 50 ms K 10, CG 10",
-            Class::Tight => "RK4, SMC μ 2 ms K 200, cholesky_pcg",
-        }
-    }
+/// One dsmcosim configuration: scenario keys over the grid scene, and a label.
+#[derive(Clone, Debug)]
+struct DsmSetting {
+    label: String,
+    keys: Value,
 }
 
 /// Which Rapier joint stands for a distance link (see the crate docs).
@@ -184,8 +232,9 @@ impl Measured {
     }
 }
 
-/// The validated scenario of an `n`×`n` grid run for `steps` steps in `class`.
-fn scenario(n: usize, class: Class, steps: u64, tight_exact: bool) -> Scenario {
+/// The validated scenario of an `n`×`n` grid run for `steps` steps with dsmcosim
+/// setting `set`.
+fn scenario(n: usize, class: Class, steps: u64, set: &DsmSetting) -> Scenario {
     let mut v = json!({
         "name": format!("rapier_{}_{n}", class.name()),
         "seed": 1,
@@ -197,11 +246,8 @@ fn scenario(n: usize, class: Class, steps: u64, tight_exact: bool) -> Scenario {
         "divergence": {"max_violation": 1.0},
         "measurement": {"period": steps as f64 * DT},
     });
-    for (k, val) in class.dsm_settings().as_object().expect("object") {
+    for (k, val) in set.keys.as_object().expect("object") {
         v[k] = val.clone();
-    }
-    if tight_exact && class == Class::Tight {
-        v["solver"] = json!({"kind": "cholesky"});
     }
     parse_str(&v.to_string(), "rapier bench").expect("valid bench scenario")
 }
@@ -421,13 +467,15 @@ fn search_substeps(
     set: &mut RapierSettings,
     target: f64,
     max: usize,
-) -> Result<Measured, String> {
+) -> Result<Searched, String> {
     let mut best: Option<(usize, Measured)> = None;
+    let mut first = None;
     let mut tried = std::collections::BTreeMap::new();
     loop {
         let r = run_logged(s, set)?;
         let w = r.max_w;
         tried.insert(set.substeps, w);
+        first.get_or_insert_with(|| (*set, r.clone()));
         let met = w <= target;
         if met && best.as_ref().is_none_or(|(k, _)| set.substeps < *k) {
             best = Some((set.substeps, r));
@@ -443,10 +491,11 @@ fn search_substeps(
         }
         set.substeps = next;
     }
-    match best {
+    let first = first.expect("ok: the loop runs at least once");
+    let kept = match best {
         Some((k, m)) => {
             set.substeps = k;
-            Ok(m)
+            m
         }
         // The target was not met within `max` substeps: report the last (tightest) run.
         None => {
@@ -454,9 +503,17 @@ fn search_substeps(
                 "  Rapier did not reach {} m within {max} substeps",
                 sci(target)
             );
-            run_rapier(s, set)
+            run_rapier(s, set)?
         }
-    }
+    };
+    Ok(Searched { kept, first })
+}
+
+/// What [`search_substeps`] found: the run it kept, and the first run it made (at the
+/// substeps it started from, with those settings).
+struct Searched {
+    kept: Measured,
+    first: (RapierSettings, Measured),
 }
 
 /// Command line.
@@ -469,8 +526,13 @@ struct Args {
     loose_substeps: Option<usize>,
     warmstart_joints: bool,
     max_substeps: usize,
-    /// The tight class on `cholesky` (factorized every solve) instead of `cholesky_pcg`.
+    /// The tight class's reference on `cholesky` (factorized every solve) instead of
+    /// `cholesky_pcg`.
     tight_exact: bool,
+    /// Time only each class's reference setting of dsmcosim (no cheaper candidates).
+    reference_only: bool,
+    /// Timings of each kept pair, alternating the engines; the fastest of each counts.
+    repeats: usize,
 }
 
 fn parse_args() -> Result<Args, String> {
@@ -484,6 +546,8 @@ fn parse_args() -> Result<Args, String> {
         warmstart_joints: false,
         max_substeps: 1024,
         tight_exact: false,
+        reference_only: false,
+        repeats: 3,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -514,12 +578,14 @@ fn parse_args() -> Result<Args, String> {
             "--warmstart-joints" => a.warmstart_joints = true,
             "--max-substeps" => a.max_substeps = num(&value()?)?,
             "--tight-exact" => a.tight_exact = true,
+            "--reference-only" => a.reference_only = true,
+            "--repeats" => a.repeats = num(&value()?)?.max(1),
             "-h" | "--help" => {
                 println!(
                     "usage: rapier-bench [--grids 16,32,64,128] [--classes loose,tight] \
                      [--steps N] [--joint distance|rope] [--substeps N] \
                      [--loose-substeps N] [--warmstart-joints] [--max-substeps N] \
-                     [--tight-exact]"
+                     [--tight-exact] [--reference-only] [--repeats R]"
                 );
                 std::process::exit(0);
             }
@@ -556,6 +622,152 @@ fn rate(x: f64) -> String {
     }
 }
 
+/// One table row: dsmcosim's kept setting beside one Rapier setting.
+struct Row {
+    n: usize,
+    steps: u64,
+    accuracy: String,
+    target: Option<f64>,
+    dsm_label: String,
+    dsm: Result<Measured, String>,
+    rapier_set: RapierSettings,
+    rapier: Result<Measured, String>,
+}
+
+impl Row {
+    fn markdown(&self) -> String {
+        let Row { n, dsm, rapier, .. } = self;
+        format!(
+            "| {n}×{n} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            self.steps,
+            self.accuracy,
+            self.target.map_or("—".into(), sci),
+            self.dsm_label,
+            dsm.as_ref().map_or("failed".into(), |m| sci(m.max_w)),
+            dsm.as_ref().map_or("—".into(), |m| rate(m.rate())),
+            self.rapier_set.label(),
+            rapier.as_ref().map_or("failed".into(), |m| sci(m.max_w)),
+            rapier.as_ref().map_or("—".into(), |m| rate(m.rate())),
+            match (dsm, rapier) {
+                (Ok(d), Ok(r)) => format!("{:.2}×", d.rate() / r.rate()),
+                _ => "—".into(),
+            },
+            match (dsm, rapier) {
+                (Ok(d), Ok(r)) => sci(max_gap(&d.end, &r.end)),
+                _ => "—".into(),
+            }
+        )
+    }
+}
+
+/// Keeps the faster of `best` and a fresh timing of the same (deterministic) run.
+fn keep_faster(best: &mut Result<Measured, String>, again: Result<Measured, String>) {
+    if let (Ok(b), Ok(a)) = (best, again) {
+        b.secs = b.secs.min(a.secs);
+    }
+}
+
+/// The rows of one grid and class.
+fn measure(args: &Args, n: usize, class: Class) -> Vec<Row> {
+    let steps = args.steps.unwrap_or_else(|| default_steps(n));
+    let mut settings = class.dsm_settings(args.tight_exact);
+    if args.reference_only {
+        settings.truncate(1);
+    }
+    let scenarios: Vec<Scenario> = settings
+        .iter()
+        .map(|d| scenario(n, class, steps, d))
+        .collect();
+    let s = &scenarios[0];
+    eprintln!(
+        "{n}×{n} {}: {} bodies, {} links, {steps} steps",
+        class.name(),
+        s.bodies.len(),
+        s.links.len()
+    );
+    // dsmcosim: every setting once; the reference's max |w| is the class's accuracy.
+    let runs: Vec<Result<Measured, String>> = settings
+        .iter()
+        .zip(&scenarios)
+        .map(|(d, sc)| {
+            let r = run_dsm(sc);
+            match &r {
+                Ok(m) => eprintln!(
+                    "  dsmcosim ({}): max |w| {} m, {:.2} s, {}",
+                    d.label,
+                    sci(m.max_w),
+                    m.secs,
+                    rate(m.rate())
+                ),
+                Err(e) => eprintln!("  dsmcosim ({}) failed: {e}", d.label),
+            }
+            r
+        })
+        .collect();
+    let target = runs[0].as_ref().ok().map(|m| m.max_w);
+    // The fastest setting that holds the links at least as tight as the reference.
+    let chosen = runs
+        .iter()
+        .enumerate()
+        .filter_map(|(i, r)| r.as_ref().ok().map(|m| (i, m)))
+        .filter(|(_, m)| target.is_some_and(|t| m.max_w <= t))
+        .min_by(|a, b| a.1.secs.total_cmp(&b.1.secs))
+        .map_or(0, |(i, _)| i);
+    let mut dsm = runs[chosen].clone();
+
+    // Rapier (the model part of every setting's scenario is the same: bodies, links,
+    // forces, dt, steps). Loose: its defaults, and the fewest substeps that still meet
+    // the target; tight: the fewest substeps that meet it.
+    let mut set = RapierSettings::defaults(args.joint);
+    if class == Class::Tight {
+        set.warmstart_joints = args.warmstart_joints;
+    }
+    let fixed = match class {
+        Class::Loose => args.loose_substeps,
+        Class::Tight => args.substeps,
+    };
+    let mut rapier: Vec<(String, RapierSettings, Result<Measured, String>)> = Vec::new();
+    match (fixed, target) {
+        (Some(k), _) => {
+            set.substeps = k;
+            rapier.push((class.name().into(), set, run_logged(s, &set)));
+        }
+        (None, None) => rapier.push((class.name().into(), set, run_logged(s, &set))),
+        (None, Some(t)) => match search_substeps(s, &mut set, t, args.max_substeps) {
+            Ok(found) => {
+                let (first_set, first) = found.first;
+                if class == Class::Loose && first_set.substeps != set.substeps {
+                    rapier.push(("loose, Rapier's defaults".into(), first_set, Ok(first)));
+                    rapier.push(("loose, Rapier's cheapest".into(), set, Ok(found.kept)));
+                } else {
+                    rapier.push((class.name().into(), set, Ok(found.kept)));
+                }
+            }
+            Err(e) => rapier.push((class.name().into(), set, Err(e))),
+        },
+    }
+    // The kept runs again, the engines alternating; the fastest timing of each counts.
+    for _ in 1..args.repeats {
+        keep_faster(&mut dsm, run_dsm(&scenarios[chosen]));
+        for (_, set, r) in &mut rapier {
+            keep_faster(r, run_rapier(s, set));
+        }
+    }
+    rapier
+        .into_iter()
+        .map(|(accuracy, rapier_set, rapier)| Row {
+            n,
+            steps,
+            accuracy,
+            target,
+            dsm_label: settings[chosen].label.clone(),
+            dsm: dsm.clone(),
+            rapier_set,
+            rapier,
+        })
+        .collect()
+}
+
 fn main() {
     let args = parse_args().unwrap_or_else(|e| {
         eprintln!("error: {e}");
@@ -563,80 +775,23 @@ fn main() {
     });
     let mut rows = Vec::new();
     for &n in &args.grids {
-        let steps = args.steps.unwrap_or_else(|| default_steps(n));
         for &class in &args.classes {
-            let s = scenario(n, class, steps, args.tight_exact);
-            eprintln!(
-                "{n}×{n} {}: {} bodies, {} links, {steps} steps",
-                class.name(),
-                s.bodies.len(),
-                s.links.len()
-            );
-            let dsm = run_dsm(&s);
-            match &dsm {
-                Ok(m) => eprintln!(
-                    "  dsmcosim: max |w| {} m, {:.2} s, {}",
-                    sci(m.max_w),
-                    m.secs,
-                    rate(m.rate())
-                ),
-                Err(e) => eprintln!("  dsmcosim failed: {e}"),
+            for row in measure(&args, n, class) {
+                let line = row.markdown();
+                eprintln!("{line}");
+                rows.push(line);
             }
-            // Rapier: defaults for loose; for tight, the fewest substeps at which its max |w|
-            // is at or below dsmcosim's (up to --max-substeps), unless --substeps fixes them.
-            let mut set = RapierSettings::defaults(args.joint);
-            if class == Class::Tight {
-                set.warmstart_joints = args.warmstart_joints;
-            }
-            let fixed = match class {
-                Class::Loose => args.loose_substeps,
-                Class::Tight => args.substeps,
-            };
-            if let Some(k) = fixed {
-                set.substeps = k;
-            }
-            let target = match (&dsm, class) {
-                (Ok(m), Class::Tight) if args.substeps.is_none() => Some(m.max_w),
-                _ => None,
-            };
-            let rap = match target {
-                None => run_logged(&s, &set),
-                Some(t) => search_substeps(&s, &mut set, t, args.max_substeps),
-            };
-            let row = format!(
-                "| {n}×{n} | {steps} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
-                class.name(),
-                if args.tight_exact && class == Class::Tight {
-                    "RK4, SMC μ 2 ms K 200, cholesky"
-                } else {
-                    class.dsm_label()
-                },
-                dsm.as_ref().map_or("failed".into(), |m| sci(m.max_w)),
-                dsm.as_ref().map_or("—".into(), |m| rate(m.rate())),
-                set.label(),
-                rap.as_ref().map_or("failed".into(), |m| sci(m.max_w)),
-                rap.as_ref().map_or("—".into(), |m| rate(m.rate())),
-                match (&dsm, &rap) {
-                    (Ok(d), Ok(r)) => format!("{:.2}×", d.rate() / r.rate()),
-                    _ => "—".into(),
-                },
-                match (&dsm, &rap) {
-                    (Ok(d), Ok(r)) => sci(max_gap(&d.end, &r.end)),
-                    _ => "—".into(),
-                }
-            );
-            eprintln!("{row}");
-            rows.push(row);
         }
     }
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
-        "| grid | steps (dt 1 ms) | accuracy | dsmcosim settings | dsmcosim max \\|w\\| [m] | \
-         dsmcosim body-steps/s | Rapier settings | Rapier max \\|w\\| [m] | \
-         Rapier body-steps/s | dsmcosim ÷ Rapier | end positions apart [m] |"
+        "| grid | steps (dt 1 ms) | accuracy | target max \\|w\\| [m] | dsmcosim settings | \
+         dsmcosim max \\|w\\| [m] | dsmcosim body-steps/s | Rapier settings | \
+         Rapier max \\|w\\| [m] | Rapier body-steps/s | dsmcosim ÷ Rapier | \
+         end positions apart [m] |"
     )
-    .and_then(|_| writeln!(out, "|---|---|---|---|---|---|---|---|---|---|---|"))
+    .and_then(|_| writeln!(out, "|---|---|---|---|---|---|---|---|---|---|---|---|"))
     .and_then(|_| rows.iter().try_for_each(|r| writeln!(out, "{r}")))
     .expect("stdout");
 }
