@@ -672,6 +672,17 @@ fn keep_faster(best: &mut Result<Measured, String>, again: Result<Measured, Stri
     }
 }
 
+/// The index of the fastest run whose max |w| is at or below `target` (the reference,
+/// 0, when there is no target or nothing else meets it).
+fn cheapest_meeting(runs: &[Result<Measured, String>], target: Option<f64>) -> usize {
+    runs.iter()
+        .enumerate()
+        .filter_map(|(i, r)| r.as_ref().ok().map(|m| (i, m)))
+        .filter(|(_, m)| target.is_some_and(|t| m.max_w <= t))
+        .min_by(|a, b| a.1.secs.total_cmp(&b.1.secs))
+        .map_or(0, |(i, _)| i)
+}
+
 /// The rows of one grid and class.
 fn measure(args: &Args, n: usize, class: Class) -> Vec<Row> {
     let steps = args.steps.unwrap_or_else(|| default_steps(n));
@@ -710,14 +721,7 @@ fn measure(args: &Args, n: usize, class: Class) -> Vec<Row> {
         })
         .collect();
     let target = runs[0].as_ref().ok().map(|m| m.max_w);
-    // The fastest setting that holds the links at least as tight as the reference.
-    let chosen = runs
-        .iter()
-        .enumerate()
-        .filter_map(|(i, r)| r.as_ref().ok().map(|m| (i, m)))
-        .filter(|(_, m)| target.is_some_and(|t| m.max_w <= t))
-        .min_by(|a, b| a.1.secs.total_cmp(&b.1.secs))
-        .map_or(0, |(i, _)| i);
+    let chosen = cheapest_meeting(&runs, target);
     let mut dsm = runs[chosen].clone();
 
     // Rapier (the model part of every setting's scenario is the same: bodies, links,
@@ -799,4 +803,60 @@ fn main() {
     .and_then(|_| writeln!(out, "|---|---|---|---|---|---|---|---|---|---|---|---|"))
     .and_then(|_| rows.iter().try_for_each(|r| writeln!(out, "{r}")))
     .expect("stdout");
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(max_w: f64, secs: f64) -> Result<Measured, String> {
+        Ok(Measured {
+            max_w,
+            secs,
+            body_steps: 1.0,
+            end: Vec::new(),
+        })
+    }
+
+    #[test]
+    fn the_fastest_run_that_meets_the_target_is_kept() {
+        // The reference (0) sets the target; 1 is faster but looser; 2 is faster and
+        // tighter; 3 failed.
+        let runs = vec![
+            run(2e-7, 5.0),
+            run(3e-7, 1.0),
+            run(2e-8, 3.0),
+            Err("diverged".into()),
+        ];
+        assert_eq!(cheapest_meeting(&runs, Some(2e-7)), 2);
+        // A run exactly at the target meets it.
+        let runs = vec![run(2e-7, 5.0), run(2e-7, 4.0)];
+        assert_eq!(cheapest_meeting(&runs, Some(2e-7)), 1);
+    }
+
+    #[test]
+    fn without_a_target_the_reference_is_kept() {
+        let runs = vec![Err("failed".into()), run(1e-9, 0.1)];
+        assert_eq!(cheapest_meeting(&runs, None), 0);
+    }
+
+    #[test]
+    fn every_class_parses_into_a_valid_scenario_with_its_reference_first() {
+        for class in [Class::Loose, Class::Tight] {
+            for tight_exact in [false, true] {
+                let settings = class.dsm_settings(tight_exact);
+                assert!(settings.len() >= 2, "a reference and a candidate");
+                for set in &settings {
+                    let s = scenario(4, class, 10, set);
+                    assert_eq!(s.bodies.len(), 16);
+                    assert_eq!(s.steps, 10);
+                }
+            }
+        }
+        let tight = Class::Tight.dsm_settings(false);
+        assert_eq!(
+            tight[0].keys["stabilizer"]["kind"], "smc",
+            "the shipped tight scene"
+        );
+    }
 }
