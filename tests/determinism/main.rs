@@ -398,21 +398,7 @@ fn the_parallel_lock_step_gives_the_serial_digest() {
 /// threads give the same digest, and the 2-thread run takes the parallel path.
 #[test]
 fn a_64_by_64_grid_on_16_nodes_is_the_same_on_one_and_two_threads() {
-    let n = 64;
-    let mut nodes = vec![Vec::new(); 16];
-    for r in 0..n {
-        for c in 0..n {
-            nodes[(r / 16) * 4 + c / 16].push(r * n + c + 1);
-        }
-    }
-    let v = json!({
-        "name": "grid64_16n", "seed": 1, "duration": 0.05, "dt": 0.001,
-        "model": {"grid": {"rows": n, "cols": n, "spacing": 1.8, "mass": 1.0, "size": 0.2}},
-        "forces": [{"body": 1, "amplitude": [0, 0, 20], "omega": 2.0}],
-        "solver": {"kind": "cg", "max_iterations": 10, "tolerance": 0.0},
-        "partition": {"nodes": nodes},
-        "channels": [{"name": "all", "tau": 0.005}]
-    });
+    let v = grid64_16_nodes();
     let s = dsmcosim::scenario::parse_str(&v.to_string(), "grid64_16n").expect("scenario");
     let default = dsmcosim::cosim::world::PARALLEL_MIN_LINKS;
     let (serial, took_serial) = digest_in(&pool(1), &s, default);
@@ -421,6 +407,42 @@ fn a_64_by_64_grid_on_16_nodes_is_the_same_on_one_and_two_threads() {
     assert_eq!(serial.error, None, "runs its 50 steps");
     assert_eq!(serial.steps, 51);
     assert_eq!(serial, parallel, "1 and 2 threads differ");
+}
+
+/// A 64×64 grid on 16 nodes of 16×16 bodies (CG 10, 50 steps): 8064 links per
+/// lock-step, above the parallel lock-step's threshold.
+fn grid64_16_nodes() -> serde_json::Value {
+    let n = 64;
+    let mut nodes = vec![Vec::new(); 16];
+    for r in 0..n {
+        for c in 0..n {
+            nodes[(r / 16) * 4 + c / 16].push(r * n + c + 1);
+        }
+    }
+    json!({
+        "name": "grid64_16n", "seed": 1, "duration": 0.05, "dt": 0.001,
+        "model": {"grid": {"rows": n, "cols": n, "spacing": 1.8, "mass": 1.0, "size": 0.2}},
+        "forces": [{"body": 1, "amplitude": [0, 0, 20], "omega": 2.0}],
+        "solver": {"kind": "cg", "max_iterations": 10, "tolerance": 0.0},
+        "partition": {"nodes": nodes},
+        "channels": [{"name": "all", "tau": 0.005}]
+    })
+}
+
+/// The same grid through `dsmcosim run`, which drives the world from a thread of
+/// rayon's pool: 1 and 2 threads give the library's digest.
+#[test]
+fn the_binary_steps_a_parallel_lock_step_to_the_same_digest_on_one_and_two_threads() {
+    let scratch = Path::new(env!("CARGO_TARGET_TMPDIR")).join("determinism_grid64_16n");
+    std::fs::create_dir_all(&scratch).expect("scratch dir");
+    let v = grid64_16_nodes();
+    let file = scratch.join("grid64_16n.json");
+    std::fs::write(&file, v.to_string()).expect("write scenario");
+    let one = run_binary(&file, &scratch.join("1"), "1");
+    let two = run_binary(&file, &scratch.join("2"), "2");
+    assert_eq!(one, two, "RAYON_NUM_THREADS=1 and 2 differ");
+    let s = dsmcosim::scenario::parse_str(&v.to_string(), "grid64_16n").expect("scenario");
+    assert_eq!(one, digest(&s).digest, "binary vs library");
 }
 
 /// `cholesky_pcg` on nodes above the dense size (a 16×16 grid on 4 nodes of 8×8: 112
