@@ -442,18 +442,21 @@ fn run_rapier(s: &Scenario, set: &RapierSettings) -> Result<Measured, String> {
 
 /// [`run_rapier`], with its result on stderr.
 fn run_logged(s: &Scenario, set: &RapierSettings) -> Result<Measured, String> {
-    let r = run_rapier(s, set);
-    match &r {
+    logged("Rapier", &set.label(), run_rapier(s, set))
+}
+
+/// `run`, with its result on stderr as one line naming the engine and its settings.
+fn logged(engine: &str, label: &str, run: Result<Measured, String>) -> Result<Measured, String> {
+    match &run {
         Ok(m) => eprintln!(
-            "  Rapier ({}): max |w| {} m, {:.2} s, {}",
-            set.label(),
+            "  {engine} ({label}): max |w| {} m, {:.2} s, {}",
             sci(m.max_w),
             m.secs,
             rate(m.rate())
         ),
-        Err(e) => eprintln!("  Rapier ({}) failed: {e}", set.label()),
+        Err(e) => eprintln!("  {engine} ({label}) failed: {e}"),
     }
-    r
+    run
 }
 
 /// The fewest substeps at which Rapier's max |w| is at or below `target`, and that run.
@@ -705,20 +708,7 @@ fn measure(args: &Args, n: usize, class: Class) -> Vec<Row> {
     let runs: Vec<Result<Measured, String>> = settings
         .iter()
         .zip(&scenarios)
-        .map(|(d, sc)| {
-            let r = run_dsm(sc);
-            match &r {
-                Ok(m) => eprintln!(
-                    "  dsmcosim ({}): max |w| {} m, {:.2} s, {}",
-                    d.label,
-                    sci(m.max_w),
-                    m.secs,
-                    rate(m.rate())
-                ),
-                Err(e) => eprintln!("  dsmcosim ({}) failed: {e}", d.label),
-            }
-            r
-        })
+        .map(|(d, sc)| logged("dsmcosim", &d.label, run_dsm(sc)))
         .collect();
     let target = runs[0].as_ref().ok().map(|m| m.max_w);
     let chosen = cheapest_meeting(&runs, target);
