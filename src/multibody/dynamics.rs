@@ -139,6 +139,18 @@ impl System {
                 self.ws.torque[i] = self.extra_torque[i] - w.cross(&(self.ws.inertia_world[i] * w));
             }
         }
+        // Later stages of a step carry the extra loads by their rates (the first stage,
+        // at their own time, adds nothing, so single-stage schemes keep their bits).
+        let rate = &self.extra_rate;
+        if t != rate.from && !rate.force.is_empty() {
+            let s = SimTime(t.0.saturating_sub(rate.from.0)).as_secs_f64();
+            for (f, r) in self.ws.force.iter_mut().zip(&rate.force) {
+                *f += r * s;
+            }
+            for (tq, r) in self.ws.torque.iter_mut().zip(&rate.torque) {
+                *tq += r * s;
+            }
+        }
     }
 
     /// Stage 3: per-link kinematics (and, under SMC, the current multipliers' forces).

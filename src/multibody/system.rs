@@ -41,6 +41,12 @@ pub struct System {
     pub extra_force: Vec<Vector3<f64>>,
     /// Extra external torque per body [N·m] (rigid path only; empty on point masses).
     pub extra_torque: Vec<Vector3<f64>>,
+    /// Rate of each body's extra force [N/s] and torque [N·m/s] (empty: held constant).
+    /// A stage at time `t` of the step that began at [`System::extra_from`] applies
+    /// `extra + rate·(t − extra_from)`: border values carried to each stage's time, so
+    /// that a partition keeps a multi-stage integrator's order (held over RK4's stages,
+    /// a border force makes the whole run first order in `dt`).
+    pub extra_rate: ExtraRate,
     pub(crate) mass: MassData,
     pub(crate) geo: Geometry,
     pub(crate) ws: Workspace,
@@ -54,6 +60,17 @@ pub struct System {
     /// stabilizer absorbs, and the largest such residual among them.
     pub(crate) cg_stalled: usize,
     pub(crate) cg_worst: f64,
+}
+
+/// The rates of a system's extra loads over a step (see [`System::extra_rate`]).
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ExtraRate {
+    /// Time the extra loads hold their value at (the step's start).
+    pub from: SimTime,
+    /// Force rate per body [N/s] (empty: none).
+    pub force: Vec<Vector3<f64>>,
+    /// Torque rate per body [N·m/s] (rigid path; empty: none).
+    pub torque: Vec<Vector3<f64>>,
 }
 
 /// Consecutive stalled CG solves ([`System::check_cg_budget`]) after which a violation
@@ -150,6 +167,7 @@ impl System {
             dt: scenario.dt,
             extra_force: vec![v3(); nb],
             extra_torque: vec![v3(); nr],
+            extra_rate: ExtraRate::default(),
             mass,
             geo,
             ws: Workspace {
@@ -288,7 +306,12 @@ impl System {
         self.rigid
     }
 
-    /// The integration step.
+    /// Whether the integrator evaluates rates after the step's start (RK4's stages).
+    pub fn is_multistage(&self) -> bool {
+        self.integrator == Integrator::Rk4
+    }
+
+    /// Step length.
     pub fn dt(&self) -> SimTime {
         self.dt
     }

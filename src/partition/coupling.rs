@@ -118,6 +118,16 @@ impl Extrapolated {
         }
     }
 
+    /// `(Ḟ, Ṫ)` at `t` while the age is below `cap`, zero once the value is held: the
+    /// slope of [`Extrapolated::at`] going forward from `t`.
+    pub fn rate_at(&self, t: SimTime, cap: SimTime) -> (Vector3<f64>, Vector3<f64>) {
+        if t.0.saturating_sub(self.sent.0) < cap.0 {
+            (self.force_rate, self.torque_rate)
+        } else {
+            (Vector3::zeros(), Vector3::zeros())
+        }
+    }
+
     /// `(F + Ḟ·age, T + Ṫ·age)` at `t`, the age capped at `cap` (never negative).
     pub fn at(&self, t: SimTime, cap: SimTime) -> (Vector3<f64>, Vector3<f64>) {
         let age = SimTime(t.0.saturating_sub(self.sent.0).min(cap.0)).as_secs_f64();

@@ -520,8 +520,9 @@ impl Node {
                 self.system.extra_torque[b] = Vector3::zeros();
             }
         }
+        let cap = self.coupling.scheme.extrapolate();
         for (h, now) in self.held_forces.iter().zip(&mut self.coupling.held_now) {
-            *now = h.value.at(t, self.coupling.scheme.extrapolate());
+            *now = h.value.at(t, cap);
             self.system.extra_force[h.body] += now.0;
             if rigid {
                 self.system.extra_torque[h.body] += now.1;
@@ -529,16 +530,50 @@ impl Node {
         }
         for (k, load) in self.coupling.ghost_loads.iter().enumerate() {
             let g = self.owned + k;
-            let (f, tq) = load.at(t, self.coupling.scheme.extrapolate());
+            let (f, tq) = load.at(t, cap);
             self.system.extra_force[g] = f;
             if rigid {
                 self.system.extra_torque[g] = tq;
             }
         }
+        self.stage_rates(t, cap);
         if let Some(tank) = self.coupling.scheme.tank() {
             self.passivity(tank);
         }
         self.step_lines(t);
+    }
+
+    /// On a multi-stage integrator (RK4), the rates at which the border loads set for
+    /// the step at `t` move over the step's stages: each held force and owner-side
+    /// load carried by its own rate, as [`Extrapolated::at`] carries it between steps.
+    /// Held over the stages instead, they would make a partitioned RK4 run first order.
+    fn stage_rates(&mut self, t: SimTime, cap: SimTime) {
+        if !self.system.is_multistage() {
+            return;
+        }
+        let rate = &mut self.system.extra_rate;
+        rate.from = t;
+        rate.force.clear();
+        rate.force.resize(self.bodies.len(), Vector3::zeros());
+        rate.torque.clear();
+        if self.state.is_rigid() {
+            rate.torque.resize(self.bodies.len(), Vector3::zeros());
+        }
+        for h in &self.held_forces {
+            let (f, tq) = h.value.rate_at(t, cap);
+            rate.force[h.body] += f;
+            if let Some(r) = rate.torque.get_mut(h.body) {
+                *r += tq;
+            }
+        }
+        for (k, load) in self.coupling.ghost_loads.iter().enumerate() {
+            let g = self.owned + k;
+            let (f, tq) = load.rate_at(t, cap);
+            rate.force[g] = f;
+            if let Some(r) = rate.torque.get_mut(g) {
+                *r = tq;
+            }
+        }
     }
 
     /// After a step in `hold` mode, puts every ghost back at its held state.
