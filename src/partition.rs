@@ -11,6 +11,7 @@
 //! A monolithic run is the one-node layout: the node's system is the whole model, it
 //! has no ghosts and sends nothing.
 
+pub mod com;
 pub mod coupling;
 pub mod layout;
 pub mod line;

@@ -5,15 +5,25 @@
 //! tension along the link,
 //!
 //! ```text
-//! T = c + Z s,        s = −n · Ṗ  (this end's extension rate),
+//! T = c + Z s,        s = −n · (Ṗ − V)  (this end's extension rate),
 //! ```
 //!
-//! where `n` points from the end's anchor `P` to the other end, `Z` is the line's
-//! impedance and `c` the wave that arrived from the other end. Each end sends back the
-//! wave `c + 2 Z s`. The power a line takes from an end's body is `T s = (b² − c²)/4Z`
-//! for the outgoing wave `b`: what a line gives its bodies is what earlier went in as
-//! waves, so it stores energy (a spring of stiffness `Z / T` for a one-way delay `T`)
-//! and never makes any.
+//! where `n` points from the end's anchor `P` to the other end, `V` is the model's
+//! centre-of-mass velocity ([`super::com`], the same at every node at the same time),
+//! `Z` is the line's impedance and `c` the wave that arrived from the other end. Each
+//! end sends back the wave `c + 2 Z s`. The power a line takes from an end's body
+//! (measured against `V`) is `T s = (b² − c²)/4Z` for the outgoing wave `b`: what a
+//! line gives its bodies is what earlier went in as waves, so it stores energy (a
+//! spring of stiffness `Z / T` with a parasitic mass `Z T` for a one-way delay `T`)
+//! and never makes any. Measured against `V` rather than absolutely, the line is the
+//! same in every inertial frame, also while it turns (with absolute velocities a
+//! uniform velocity shifts the waves by `∓Z n·δ`, and a link that turns while its
+//! wave travels receives a different shift than was sent: the review's translating
+//! net slowed down, an asymmetric spinning dumbbell gained momentum). What it does
+//! not make exact is momentum in a net that turns: each end's `n` moves while a wave
+//! travels, and a link whose ends slide along it (any link not through the centre of
+//! mass of a spinning net) books a wave shift that arrives turned. docs/method.md
+//! gives the measured drift.
 //!
 //! The waves travel on the border's messages, which are point samples taken every τ. A
 //! point sample of a wave held for τ is not passive (it repeats a value the sender had
@@ -23,8 +33,10 @@
 //! average, `span · avg²`, never exceeds the energy that went in over the window. A
 //! lost sample, one that arrives late, or one overtaken by a newer sample only leaves
 //! energy out. The averaging adds half a window on each side, so the line's one-way
-//! delay is `T = τ + latency` of the channel carrying the wave, and `Z = stiffness · T`
-//! with `T` the mean over the two directions, fixed from the scenario's channels.
+//! delay is `T = τ + latency` of the channel carrying the wave, the mean over the two
+//! directions, fixed from the scenario's channels. `Z` does not depend on the delay
+//! ([`default_impedance`]), so the line's stiffness `Z/T` grows and its parasitic mass
+//! `Z T` shrinks as the delay goes to zero: the line converges to the rigid link.
 //!
 //! Directions: the link owner's end sends on the link's force route, the other end on
 //! its body's state route to the owner (under the `time` distribution the first wave
@@ -32,9 +44,12 @@
 //! carries its end's anchor position and velocity, from which the other end
 //! extrapolates where the far anchor is now to set `n`: a line needs no ghost.
 //!
-//! At the start each end holds the wave `c₀ = stiffness · w₀` of the link's initial
-//! extension `w₀` until the first wave arrives, so a line starts with the tension of
-//! a spring stretched by `w₀`, as the constraint it replaces would pull.
+//! At the start each end holds the wave `c₀ = (Z/T) w₀ − Z s₀` ([`initial_wave`]) of
+//! the link's initial extension `w₀` and the end's initial extension rate `s₀` until
+//! the first wave arrives, so a line starts with the tension of a spring stretched by
+//! `w₀`, as the constraint it replaces would pull, and a net in uniform motion starts
+//! in its steady state. A wave that is lost or past its hold is replaced by the one
+//! that makes the end's tension zero.
 
 use nalgebra::Vector3;
 
@@ -61,13 +76,35 @@ pub fn filter_time(delay: f64, h: f64) -> f64 {
 use crate::kernel::SimTime;
 use crate::network::LineSample;
 use crate::partition::layout::Route;
-use crate::scenario::model::{DataKind, Scenario};
+use crate::scenario::model::{DataKind, Scenario, Stabilizer};
 
-/// Which border links are lines, and their impedances.
+/// Which border links are lines, with their impedances and delays.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct LineSet {
-    /// Per global link: its impedance `Z` [N·s/m] when it is a line.
-    impedance: Vec<Option<f64>>,
+    /// Per global link, when it is a line: its impedance `Z` [N·s/m] and one-way delay
+    /// `T` [s].
+    impedance: Vec<Option<(f64, f64)>>,
+}
+
+/// The default impedance of a line between bodies of masses `ma` and `mb` [kg] under
+/// `stabilizer` [N·s/m]: the reduced mass `m_r` times the bandwidth `ω_c` up to which the
+/// stabilizer holds a link rigid (`2/μ` under SMC, whose sliding surface is a critically
+/// damped second-order law of natural frequency `1/μ`; `β` under Baumgarte, `α` if `β`
+/// is zero). At `ω_c` the line's spring (`Z/T`) and its parasitic mass (`Z·T`) then err
+/// alike, each by about `ω_c·T` relative, and both vanish with the delay.
+pub fn default_impedance(ma: f64, mb: f64, stabilizer: &Stabilizer) -> f64 {
+    let reduced = ma * mb / (ma + mb);
+    let bandwidth = match *stabilizer {
+        Stabilizer::Smc { mu, .. } => 2.0 / mu,
+        Stabilizer::Baumgarte { alpha, beta } => {
+            if beta > 0.0 {
+                beta
+            } else {
+                alpha
+            }
+        }
+    };
+    reduced * bandwidth
 }
 
 impl LineSet {
@@ -96,7 +133,12 @@ impl LineSet {
             };
             if forward.max(back) > lines.above.0 {
                 let t = 0.5 * (SimTime(forward).as_secs_f64() + SimTime(back).as_secs_f64());
-                impedance[l] = Some(lines.stiffness * t);
+                let link = &scenario.links[l];
+                let (ma, mb) = (scenario.bodies[link.a].mass, scenario.bodies[link.b].mass);
+                let z = lines
+                    .impedance
+                    .unwrap_or_else(|| default_impedance(ma, mb, &scenario.stabilizer));
+                impedance[l] = Some((z, t));
             }
         }
         LineSet { impedance }
@@ -109,8 +151,8 @@ impl LineSet {
         }
     }
 
-    /// Impedance of link `l` [N·s/m] if it is a line.
-    pub fn impedance(&self, l: usize) -> Option<f64> {
+    /// Impedance [N·s/m] and one-way delay [s] of link `l` if it is a line.
+    pub fn impedance(&self, l: usize) -> Option<(f64, f64)> {
         self.impedance.get(l).copied().flatten()
     }
 
@@ -142,6 +184,16 @@ impl LineSet {
                 .count(),
         }
     }
+}
+
+/// The wave an end holds until the first wave arrives [N]: the one that gives the
+/// line the tension `T₀ = (Z/T) w₀` of its initial stretch `w₀` [m] (a spring of the
+/// line's stiffness) at the end's initial extension rate `s₀ = −n·Ṗ` [m/s],
+/// `c₀ = T₀ − Z s₀`. It is the wave the line would carry had its ends always moved so:
+/// a net moving as a rigid body starts with no transient, in every inertial frame (a
+/// zero initial wave braked each end's absolute velocity until the first wave came).
+pub fn initial_wave(impedance: f64, delay: f64, stretch: f64, rate: f64) -> f64 {
+    impedance / delay * stretch - impedance * rate
 }
 
 /// Where the far end of a line was when it was last sampled.
@@ -196,7 +248,7 @@ pub struct LineEnd {
 impl LineEnd {
     /// The end at local body `body` of link `link`, with the far anchor's initial
     /// position and velocity, the line's impedance `Z` and one-way delay `T` [s], and
-    /// the initial wave `c₀ = stiffness · w₀` held until the first wave arrives.
+    /// the initial wave `c₀` held until the first wave arrives (see [`initial_wave`]).
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         link: usize,
@@ -246,12 +298,23 @@ impl LineEnd {
     /// The step of length `h` [s] at `t`, this end's anchor at `p` moving at `v`: sets
     /// the tension, books the outgoing wave and the energy, and returns the force on the
     /// anchor (the caller adds the torque `r × F` on a rigid body).
-    pub fn step(&mut self, t: SimTime, h: f64, p: Vector3<f64>, v: Vector3<f64>) -> Vector3<f64> {
+    pub fn step(
+        &mut self,
+        t: SimTime,
+        h: f64,
+        (p, v): (Vector3<f64>, Vector3<f64>),
+        reference: Vector3<f64>,
+    ) -> Vector3<f64> {
         let d = self.far_anchor(t) - p;
         let len = d.norm();
         let n = if len > 0.0 { d / len } else { Vector3::zeros() };
-        let s = -n.dot(&v);
-        let held = self.held(t);
+        // The port velocity: half the extension rate this end sees, its own velocity
+        // against the far end's last sampled one. Relative, so a uniform velocity of
+        // the whole net changes no wave and no tension, also while the link turns.
+        let s = -n.dot(&(v - reference));
+        // Without a wave in force (lost, late, or past its hold) the end applies the
+        // wave that makes its tension zero: it then neither gives nor takes energy.
+        let held = self.held(t).unwrap_or(-self.impedance * s);
         // The low-pass filter of the incoming wave.
         let tf = filter_time(self.delay, h);
         let alpha = tf / (tf + h);
@@ -260,18 +323,15 @@ impl LineEnd {
         let z = self.impedance;
         self.tension = c + z * s;
         self.acc += (c + 2.0 * z * s) * h;
+        // The work on the body itself, at its own velocity.
         self.given -= self.tension * s * h;
         n * self.tension
     }
 
     /// The received wave in force at `t` (before the filter): the last one within its
-    /// hold, else zero.
-    pub fn held(&self, t: SimTime) -> f64 {
-        if t < self.hold_until {
-            self.incoming
-        } else {
-            0.0
-        }
+    /// hold, else none.
+    pub fn held(&self, t: SimTime) -> Option<f64> {
+        (t < self.hold_until).then_some(self.incoming)
     }
 
     /// The sample this end sends at `t`: the mean outgoing wave since the previous
@@ -349,7 +409,12 @@ mod tests {
         // The far end sits at +x; this end moves towards −x at 1 m/s: it extends the
         // line at 1 m/s, so T = Z·1 pulls it back (+x) and the wave sent is 2Z.
         let mut e = end(10.0, 0.0);
-        let f = e.step(ms(0), 0.001, Vector3::zeros(), Vector3::new(-1.0, 0.0, 0.0));
+        let f = e.step(
+            ms(0),
+            0.001,
+            (Vector3::zeros(), Vector3::new(-1.0, 0.0, 0.0)),
+            Vector3::zeros(),
+        );
         assert!((f - Vector3::new(10.0, 0.0, 0.0)).norm() < 1e-12);
         assert!(
             (e.given + 10.0 * 0.001).abs() < 1e-12,
@@ -361,10 +426,15 @@ mod tests {
     }
 
     #[test]
-    fn a_received_wave_is_held_for_its_window_then_dropped() {
+    fn a_received_wave_is_held_for_its_window_then_dropped_to_no_tension() {
         let mut e = end(10.0, 5.0);
         // Before any arrival the initial wave holds (and the filter starts from it).
-        let f = e.step(ms(3), 0.001, Vector3::zeros(), Vector3::zeros());
+        let f = e.step(
+            ms(3),
+            0.001,
+            (Vector3::zeros(), Vector3::zeros()),
+            Vector3::zeros(),
+        );
         assert_eq!(f.x, 5.0);
         let sample = LineSample {
             link: 0,
@@ -376,10 +446,17 @@ mod tests {
         e.receive(ms(4), ms(5), &sample);
         assert_eq!(
             (e.held(ms(5)), e.held(ms(6)), e.held(ms(7))),
-            (7.0, 7.0, 0.0)
+            (Some(7.0), Some(7.0), None)
         );
         // The filter moves the tension towards the held wave, never past it.
-        let f = e.step(ms(5), 0.001, Vector3::zeros(), Vector3::zeros()).x;
+        let f = e
+            .step(
+                ms(5),
+                0.001,
+                (Vector3::zeros(), Vector3::zeros()),
+                Vector3::zeros(),
+            )
+            .x;
         assert!(f > 5.0 && f < 7.0, "{f}");
         // An older sample arriving late changes nothing.
         e.receive(
@@ -390,7 +467,48 @@ mod tests {
                 ..sample
             },
         );
-        assert_eq!(e.held(ms(8)), 0.0);
+        assert_eq!(e.held(ms(8)), None);
+    }
+
+    #[test]
+    fn without_a_wave_the_end_pulls_nothing_in_any_frame() {
+        // Past its hold the end applies the wave of zero tension: no force, whatever
+        // the end's velocity against the reference, and the same for any reference
+        // shifted with it.
+        let mut e = end(10.0, 0.0);
+        e.receive(
+            ms(1),
+            ms(1),
+            &LineSample {
+                link: 0,
+                wave: 4.0,
+                span: ms(1),
+                p: Vector3::new(1.0, 0.0, 0.0),
+                v: Vector3::zeros(),
+            },
+        );
+        // Hold long over and the filter settled: the tension decays to zero.
+        let mut f = Vector3::zeros();
+        for k in 10..1500 {
+            let v = Vector3::new(-0.3, 0.2, 0.0);
+            f = e.step(
+                ms(k),
+                0.001,
+                (Vector3::zeros(), v + Vector3::new(5.0, 0.0, 0.0)),
+                Vector3::new(5.0, 0.0, 0.0),
+            );
+        }
+        assert!(f.norm() < 1e-6, "{f}");
+    }
+
+    #[test]
+    fn the_initial_wave_gives_a_stretched_line_its_spring_tension_at_rest_in_any_frame() {
+        // Z = 10 N·s/m, T = 5 ms: a spring of 2000 N/m; 1 mm stretched: 2 N, and an end
+        // moving with the reference (s₀ = 0) starts with exactly that tension.
+        let c0 = initial_wave(10.0, 0.005, 0.001, 0.0);
+        assert!((c0 - 2.0).abs() < 1e-12);
+        // An end receding at 0.5 m/s along the link holds c₀ = 2 − Z·0.5.
+        assert!((initial_wave(10.0, 0.005, 0.001, 0.5) - (2.0 - 5.0)).abs() < 1e-12);
     }
 
     #[test]
@@ -403,7 +521,7 @@ mod tests {
             let v = Vector3::new((k as f64 * 0.7).sin(), 0.0, 0.0);
             let b = 2.0 * 3.0 * -v.x; // c = 0, s = −n·v with n = +x
             energy_in += b * b * 0.001;
-            e.step(ms(k), 0.001, Vector3::zeros(), v);
+            e.step(ms(k), 0.001, (Vector3::zeros(), v), Vector3::zeros());
         }
         let s = e.sample(ms(20), Vector3::zeros(), Vector3::zeros());
         assert!(s.span.as_secs_f64() * s.wave * s.wave <= energy_in + 1e-12);

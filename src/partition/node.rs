@@ -8,8 +8,9 @@ use nalgebra::{Quaternion, Vector3};
 mod lines;
 mod passivity;
 
+use super::com::ComReference;
 use super::coupling::{Correction, Extrapolated, GhostHistory, GhostSample, PortAccount};
-use super::line::{LineEnd, LineSet};
+use super::line::{initial_wave, LineEnd, LineSet};
 use super::Layout;
 use crate::kernel::SimTime;
 use crate::multibody::{State, System};
@@ -83,6 +84,8 @@ pub struct Node {
     coupling: CouplingState,
     /// This node's ends of transmission lines (`partition::line`), in link order.
     lines: Vec<LineEnd>,
+    /// The centre-of-mass velocity the lines measure against (a node with lines).
+    com: Option<ComReference>,
 }
 
 impl Node {
@@ -226,8 +229,18 @@ impl Node {
             held_forces,
             held_states,
             coupling,
+            com: (!line_ends.is_empty() || scheme.tank().is_some())
+                .then(|| ComReference::new(scenario)),
             lines: line_ends,
         }
+    }
+
+    /// The centre-of-mass velocity the border ports and lines measure against [m/s]
+    /// (see [`ComReference`]; zero on a node that needs none).
+    fn reference_velocity(&self) -> Vector3<f64> {
+        self.com
+            .as_ref()
+            .map_or_else(Vector3::zeros, ComReference::velocity)
     }
 
     /// Local index of global body `g`, if this node holds it.
@@ -537,6 +550,9 @@ impl Node {
             }
         }
         self.stage_rates(t, cap);
+        if let Some(com) = &mut self.com {
+            com.advance(t);
+        }
         if let Some(tank) = self.coupling.scheme.tank() {
             self.passivity(tank);
         }
@@ -602,9 +618,9 @@ fn line_ends(
     local_body: &BTreeMap<usize, usize>,
     owned: usize,
 ) -> Vec<LineEnd> {
-    let Some(rule) = scenario.partition.as_ref().and_then(|p| p.coupling.lines()) else {
+    if !lines.any() {
         return Vec::new();
-    };
+    }
     let rigid = scenario.body_model == BodyModel::Rigid;
     let anchor_at = |b: usize, r: &Vector3<f64>| {
         let body = &scenario.bodies[b];
@@ -618,14 +634,16 @@ fn line_ends(
             (body.position, body.velocity)
         }
     };
+    let reference = ComReference::new(scenario).velocity();
     let mut ends = Vec::new();
     for (l, link) in scenario.links.iter().enumerate() {
-        let Some(z) = lines.impedance(l) else {
+        let Some((z, delay)) = lines.impedance(l) else {
             continue;
         };
-        let (pa, _) = anchor_at(link.a, &link.anchor_a);
-        let (pb, _) = anchor_at(link.b, &link.anchor_b);
-        let initial_wave = rule.stiffness * ((pa - pb).norm() - link.length);
+        let (pa, va) = anchor_at(link.a, &link.anchor_a);
+        let (pb, vb) = anchor_at(link.b, &link.anchor_b);
+        let stretch = (pa - pb).norm() - link.length;
+        let n_ab = (pb - pa).normalize();
         for (own, anchor, far, far_anchor) in [
             (link.a, link.anchor_a, link.b, link.anchor_b),
             (link.b, link.anchor_b, link.a, link.anchor_a),
@@ -635,14 +653,20 @@ fn line_ends(
             };
             let (p, v) = anchor_at(far, &far_anchor);
             let far_node = layout.node_of[far];
+            // This end's port velocity: half the link's extension rate.
+            let rate = if own == link.a {
+                -n_ab.dot(&(va - reference))
+            } else {
+                n_ab.dot(&(vb - reference))
+            };
             ends.push(LineEnd::new(
                 l,
                 local,
                 anchor,
                 (far, far_node, p, v),
                 layout.link_owner[l] == index,
-                (z, z / rule.stiffness),
-                initial_wave,
+                (z, delay),
+                initial_wave(z, delay, stretch, rate),
             ));
         }
     }

@@ -247,7 +247,7 @@ pub fn plan(scenario: &Scenario) -> Result<RunPlan> {
         lines: {
             let set = crate::partition::line::LineSet::new(s, &layout.routes);
             (0..s.links.len())
-                .filter_map(|l| set.impedance(l).map(|z| (format!("L{}", l + 1), z)))
+                .filter_map(|l| set.impedance(l).map(|(z, _)| (format!("L{}", l + 1), z)))
                 .collect()
         },
         network: match s.network {

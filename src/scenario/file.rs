@@ -565,8 +565,8 @@ pub struct PartitionFile {
     /// at the sample's time, apply `F + Ḟ·age`), `"passive"` (predict over an energy
     /// tank per border port, transmission lines where the data can be older than
     /// `lines_above`) or `"tlm"` (every border link a transmission line), or an object
-    /// `{"scheme": …, "tank": J, "extrapolate": s, "stiffness": N/m, "lines_above": s}`;
-    /// default `"passive"` with a 10 J tank, 0.01 s of extrapolation and 400 N/m lines
+    /// `{"scheme": …, "tank": J, "extrapolate": s, "impedance": N·s/m, "lines_above": s}`;
+    /// default `"passive"` with a 40 J tank, 0.01 s of extrapolation and lines
     /// above 0.04 s (bounded on the thesis scene and the 16-node scene up to τ = 50 ms
     /// and the most accurate scheme there; see docs/guide.md "Coupling across
     /// partitions").
@@ -635,7 +635,7 @@ pub enum CouplingName {
 pub struct CouplingSpecFile {
     /// The scheme.
     pub scheme: CouplingName,
-    /// `passive`: initial energy of each border port's tank [J], ≥ 0; default 10 J.
+    /// `passive`: initial energy of each border port's tank [J], ≥ 0; default 40 J.
     #[serde(default)]
     pub tank: Option<f64>,
     /// `predict` and `passive`: the longest time a border force or owner-side load is
@@ -643,10 +643,12 @@ pub struct CouplingSpecFile {
     /// default 0.01 s.
     #[serde(default)]
     pub extrapolate: Option<f64>,
-    /// `passive` and `tlm`: the transmission lines' stiffness `Z / T` [N/m], > 0
-    /// (`Z` = stiffness × the line's one-way delay `T`); default 400 N/m.
+    /// `passive` and `tlm`: the transmission lines' impedance `Z` [N·s/m], > 0 (a line
+    /// of one-way delay `T` is a spring of stiffness `Z / T` with a parasitic mass
+    /// `Z · T`); default per link: its ends' reduced mass times the stabilizer's
+    /// bandwidth (`2/μ` under SMC, `β` under Baumgarte).
     #[serde(default)]
-    pub stiffness: Option<f64>,
+    pub impedance: Option<f64>,
     /// `passive`: a border link becomes a transmission line when the oldest sample it
     /// can use (`τ + latency` of the channels carrying its data, as in the file) is
     /// older than this [s], in [0, 1000]; default 0.04 s.

@@ -287,21 +287,24 @@ pub enum Coupling {
     },
 }
 
-/// Which border links a scheme turns into transmission-line (TLM) links, and how stiff.
+/// Which border links a scheme turns into transmission-line (TLM) links, and their
+/// impedance.
 ///
 /// A line replaces the border link's constraint by two local dampers of impedance `Z`
 /// joined by waves that travel with the border's messages: it cannot create energy
-/// whatever the delay, and it is a spring of stiffness `Z / T` for a one-way delay `T`.
-/// `Z = stiffness · T`, with `T` estimated once from the channels' τ and latency in the
-/// scenario (see `partition::line`).
+/// whatever the delay, and it is a spring of stiffness `Z / T` with a parasitic mass
+/// `Z · T` for a one-way delay `T` (see `partition::line`). With `Z` independent of the
+/// delay, both errors vanish as `T → 0` and the line becomes the rigid link.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Lines {
     /// A border link becomes a line when the oldest sample it can use (the largest
     /// `τ + latency` of the channels carrying its data) is older than this [ns];
     /// `SimTime::ZERO` makes every border link a line.
     pub above: SimTime,
-    /// The lines' stiffness `Z / T` [N/m].
-    pub stiffness: f64,
+    /// The lines' impedance `Z` [N·s/m]; `None`: per link, its ends' reduced mass times
+    /// the stabilizer's bandwidth (`2/μ` under SMC, `β` under Baumgarte), the choice that
+    /// balances the line's compliance and mass errors up to that bandwidth.
+    pub impedance: Option<f64>,
 }
 
 impl Coupling {

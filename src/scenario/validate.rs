@@ -37,6 +37,7 @@ use self::checks::{
 };
 use self::network::{check_tdma, network};
 use self::partition::partition;
+pub use self::partition::{DEFAULT_EXTRAPOLATE, DEFAULT_LINES_ABOVE, DEFAULT_TANK};
 use super::file::{
     ForceFile, IntegratorFile, MeasurementFile, OutputFile, ScenarioFile, SolverFile, SolverKind,
     StabilizerFile, StabilizerKind, DEFAULT_CG_MAX_ITERATIONS, DEFAULT_CG_TOLERANCE,

@@ -2,6 +2,8 @@
 //! order of convergence in τ, the thesis scene's bound, lost data (the closed-form pair
 //! under each scheme: `tests/cosim`; checkpoint/resume under each: `tests/checkpoint`).
 
+mod invariants;
+
 use dsmcosim::cosim::{CoSim, Observer, StepValues};
 use dsmcosim::scenario::{parse_str, Scenario};
 use nalgebra::Vector3;
@@ -285,7 +287,7 @@ fn the_passive_coupling_never_gives_more_energy_than_its_tanks() {
         let mono_gain = m.kinetic.iter().fold(0.0, |a: f64, &k| a.max(k)) - ke0;
         for (coupling, tank) in [
             (r#"{"scheme": "passive", "tank": 1}"#, 1.0),
-            ("default", 10.0),
+            ("default", dsmcosim::scenario::validate::DEFAULT_TANK),
         ] {
             for tau in [0.001, 0.003, 0.005, 0.010, 0.020, 0.050] {
                 let (world, w, error) = run(&undriven(stretched, Some(coupling), tau), &[]);

@@ -226,7 +226,7 @@ mod tests {
                 extrapolate: x,
                 lines: crate::scenario::model::Lines {
                     above: SimTime(u64::MAX),
-                    stiffness: 1.0,
+                    impedance: None,
                 },
             },
         );

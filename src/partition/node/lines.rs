@@ -30,10 +30,11 @@ impl Node {
         }
         let h = self.system.dt().as_secs_f64();
         let rigid = self.state.is_rigid();
+        let reference = self.reference_velocity();
         for k in 0..self.lines.len() {
             let b = self.lines[k].body;
             let [p, v, r] = self.anchor(b, &self.lines[k].anchor);
-            let f = self.lines[k].step(t, h, p, v);
+            let f = self.lines[k].step(t, h, (p, v), reference);
             let tq = r.cross(&f);
             self.lines[k].load = (f, tq);
             self.system.extra_force[b] += f;

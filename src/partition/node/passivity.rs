@@ -66,7 +66,10 @@ impl Node {
         self.coupling.end_powers = ends;
     }
 
-    /// Velocity and angular velocity of local body `b` (zero ω on point masses).
+    /// Velocity of local body `b` relative to the centre of mass's, and its angular
+    /// velocity (zero ω on point masses). Powers booked and braked at these velocities
+    /// are the same in every inertial frame, and the brake leaves the net's motion as
+    /// a whole alone.
     fn velocities(&self, b: usize) -> (Vector3<f64>, Vector3<f64>) {
         let w = self
             .state
@@ -74,7 +77,7 @@ impl Node {
             .get(b)
             .copied()
             .unwrap_or_else(Vector3::zeros);
-        (self.state.v[b], w)
+        (self.state.v[b] - self.reference_velocity(), w)
     }
 
     /// The end of local link `l` that is not `g`.

@@ -73,15 +73,12 @@ pub(super) fn partition(
 /// The default initial tank of the `passive` coupling per border port [J], and the
 /// default extrapolation horizon of `predict` and `passive` [s]: chosen on the thesis
 /// scene (docs/guide.md "Coupling across partitions" gives the measurements).
-pub const DEFAULT_TANK: f64 = 10.0;
+pub const DEFAULT_TANK: f64 = 40.0;
 /// See [`DEFAULT_TANK`].
 pub const DEFAULT_EXTRAPOLATE: f64 = 0.01;
 
-/// The default stiffness of the transmission lines [N/m] and the age above which the
-/// `passive` scheme turns a border link into a line [s] (docs/guide.md "Coupling across
-/// partitions" gives the measurements behind both).
-pub const DEFAULT_STIFFNESS: f64 = 400.0;
-/// See [`DEFAULT_STIFFNESS`].
+/// The age above which the `passive` scheme turns a border link into a transmission
+/// line [s] (docs/guide.md "Coupling across partitions" gives the measurements).
 pub const DEFAULT_LINES_ABOVE: f64 = 0.04;
 
 /// `partition.coupling`.
@@ -91,7 +88,7 @@ fn coupling(c: &CouplingFile) -> Result<Coupling> {
             scheme,
             tank: None,
             extrapolate: None,
-            stiffness: None,
+            impedance: None,
             lines_above: None,
         },
         CouplingFile::Spec(spec) => spec,
@@ -118,8 +115,8 @@ fn coupling(c: &CouplingFile) -> Result<Coupling> {
         "only the \"passive\" scheme has a tank",
     )?;
     not_for(
-        "stiffness",
-        spec.stiffness,
+        "impedance",
+        spec.impedance,
         &[Passive, Tlm],
         "only the \"passive\" and \"tlm\" schemes have transmission lines",
     )?;
@@ -142,11 +139,11 @@ fn coupling(c: &CouplingFile) -> Result<Coupling> {
         spec.extrapolate.unwrap_or(DEFAULT_EXTRAPOLATE),
         10.0,
     )?;
-    let stiffness = spec.stiffness.unwrap_or(DEFAULT_STIFFNESS);
-    if !(stiffness.is_finite() && stiffness > 0.0) {
+    let impedance = spec.impedance;
+    if let Some(z) = impedance.filter(|z| !(z.is_finite() && *z > 0.0)) {
         return Err(Error::invalid(
-            "partition.coupling.stiffness",
-            format!("must be a finite stiffness > 0 N/m, got {stiffness}"),
+            "partition.coupling.impedance",
+            format!("must be a finite impedance > 0 N·s/m, got {z}"),
         ));
     }
     let above = time(
@@ -168,14 +165,14 @@ fn coupling(c: &CouplingFile) -> Result<Coupling> {
             Ok(Coupling::Passive {
                 tank,
                 extrapolate,
-                lines: Lines { above, stiffness },
+                lines: Lines { above, impedance },
             })
         }
         Tlm => Ok(Coupling::Tlm {
             extrapolate,
             lines: Lines {
                 above: SimTime::ZERO,
-                stiffness,
+                impedance,
             },
         }),
     }
