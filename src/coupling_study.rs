@@ -8,9 +8,11 @@
 //!      ├─▶ per scheme × distribution: τ = dt, latency 0 (the convergence reference)
 //!      └─▶ per scheme × distribution × τ: latency = τ (each sample arrives τ late)
 //!                    │ positions of the first and last body over [0, 3 s],
-//!                    │ kinetic energy over the undriven tail, max |w|, wall time
+//!                    │ kinetic energy, momentum and angular momentum over the
+//!                    │ undriven tail, max |w|, wall time
 //!                    ▼
-//!          coupling.csv, coupling.md, error_vs_tau.svg, max_w_vs_tau.svg
+//!          coupling.csv, coupling.md, error_vs_tau.svg, max_w_vs_tau.svg,
+//!          energy_vs_tau.svg
 //! ```
 //!
 //! Distributions (the thesis's two readings of which data travels on which channel):
@@ -25,7 +27,12 @@
 //! from the monolithic run, so a long-horizon error measures the chaos, not the
 //! coupling. Energy drift is the relative change of the kinetic energy
 //! `Σ ½ m |v|²` over the undriven tail (from the last force's switch-off to the end,
-//! when that tail is at least 1 s long). Cost per step is the wall time of the cell
+//! when that tail is at least 1 s long); momentum drift the change of the total linear
+//! momentum over the same tail [kg·m/s], angular-momentum drift the relative change of
+//! the angular momentum about the centre of mass (both kept to round-off by the
+//! monolithic run, which the markdown shows beside them). The fitted order in τ is the
+//! least-squares slope of log(error vs τ = dt) against log τ over a row's bounded
+//! cells. Cost per step is the wall time of the cell
 //! divided by that of `reset` at the same τ and distribution (each the fastest of
 //! [`TIMING_RUNS`] runs, one after the other on one core): the only non-deterministic
 //! column, and a rough one; `cargo bench --bench coupling` measures it properly.
@@ -45,9 +52,9 @@ use crate::output::create_dir_all;
 use crate::scenario::{parse_str, Scenario};
 
 /// The schemes the study compares: a label and the `partition.coupling` value (JSON).
-/// `passive` is the default (10 J tank, transmission lines where a border's samples
+/// `passive` is the default (40 J tank, transmission lines where a border's samples
 /// can be older than 40 ms); `passive, no lines` is the same predictor and tank on
-/// every border, what the default was before lines; `passive 1 J` shows what a tenfold
+/// every border, what the default was before lines; `passive 1 J` shows what a 40-fold
 /// tighter energy bound costs in accuracy; `tlm` makes every border link a line.
 pub const SCHEMES: [(&str, &str); 6] = [
     ("reset", r#""reset""#),
@@ -92,6 +99,12 @@ pub struct Cell {
     pub err_dt: f64,
     /// Relative change of kinetic energy over the undriven tail (NaN without one).
     pub energy_drift: f64,
+    /// Change of the total linear momentum over the undriven tail, `|P_end − P_start|`
+    /// [kg·m/s] (NaN without a tail; the monolithic run keeps it to round-off).
+    pub momentum_drift: f64,
+    /// Relative change of the angular momentum about the centre of mass over the
+    /// undriven tail, `|L_end − L_start| / |L_start|` (NaN without a tail).
+    pub angular_drift: f64,
     /// Wall time per step [s].
     pub wall_per_step: f64,
 }
@@ -115,6 +128,10 @@ struct Watch {
     tail: Option<u64>,
     ke_tail_start: f64,
     ke_end: f64,
+    /// Momentum and angular momentum about the centre of mass at the tail's start and
+    /// at the end.
+    momenta_tail_start: [Vector3<f64>; 2],
+    momenta_end: [Vector3<f64>; 2],
     max_w: f64,
 }
 
@@ -139,6 +156,8 @@ impl Watch {
             tail,
             ke_tail_start: f64::NAN,
             ke_end: f64::NAN,
+            momenta_tail_start: [Vector3::repeat(f64::NAN); 2],
+            momenta_end: [Vector3::repeat(f64::NAN); 2],
             max_w: 0.0,
         }
     }
@@ -148,6 +167,23 @@ impl Watch {
             .zip(&self.masses)
             .map(|(v, m)| 0.5 * m * v.norm_squared())
             .sum()
+    }
+
+    /// Total linear momentum and angular momentum about the centre of mass of point
+    /// masses at `p` moving at `v`.
+    fn momenta(&self, p: &[Vector3<f64>], v: &[Vector3<f64>]) -> [Vector3<f64>; 2] {
+        let total: f64 = self.masses.iter().sum();
+        let (mut momentum, mut centre) = (Vector3::zeros(), Vector3::zeros());
+        for ((x, v), m) in p.iter().zip(v).zip(&self.masses) {
+            momentum += v * *m;
+            centre += x * *m;
+        }
+        let (centre, vc) = (centre / total, momentum / total);
+        let mut angular = Vector3::zeros();
+        for ((x, v), m) in p.iter().zip(v).zip(&self.masses) {
+            angular += (x - centre).cross(&(v - vc)) * *m;
+        }
+        [momentum, angular]
     }
 }
 
@@ -160,9 +196,11 @@ impl Observer for Watch {
         }
         if Some(t) == self.tail {
             self.ke_tail_start = self.kinetic(s.v);
+            self.momenta_tail_start = self.momenta(s.p, s.v);
         }
         if s.last {
             self.ke_end = self.kinetic(s.v);
+            self.momenta_end = self.momenta(s.p, s.v);
         }
         for w in s.w {
             self.max_w = self.max_w.max(w.abs());
@@ -339,6 +377,9 @@ pub fn study(
             let r = run(s);
             tick(&mut done);
             let drift = (r.watch.ke_end - r.watch.ke_tail_start) / r.watch.ke_tail_start;
+            let [p0, l0] = r.watch.momenta_tail_start;
+            let [p1, l1] = r.watch.momenta_end;
+            let ok = r.error.is_none();
             cells.push(Cell {
                 scheme,
                 distribution,
@@ -346,7 +387,13 @@ pub fn study(
                 max_w: r.watch.max_w,
                 err_mono: rms_error(&r.watch, &mono.watch),
                 err_dt: rms_error(&r.watch, &reference.watch),
-                energy_drift: if r.error.is_none() { drift } else { f64::NAN },
+                energy_drift: if ok { drift } else { f64::NAN },
+                momentum_drift: if ok { (p1 - p0).norm() } else { f64::NAN },
+                angular_drift: if ok {
+                    (l1 - l0).norm() / l0.norm()
+                } else {
+                    f64::NAN
+                },
                 error: r.error,
                 wall_per_step: r.wall_per_step,
             });
@@ -355,10 +402,15 @@ pub fn study(
     create_dir_all(out)?;
     write_csv(out, &cells)?;
     let mono_drift = (mono.watch.ke_end - mono.watch.ke_tail_start) / mono.watch.ke_tail_start;
+    let [p0, l0] = mono.watch.momenta_tail_start;
+    let [p1, l1] = mono.watch.momenta_end;
     let reference = format!(
-        "The monolithic run: max |w| {:.3} m, energy drift over the undriven tail {}.",
+        "The monolithic run: max |w| {:.3} m; over the undriven tail energy drift {}, \
+         momentum drift {} kg·m/s, angular-momentum drift {}.",
         mono.watch.max_w,
-        fmt(mono_drift)
+        fmt(mono_drift),
+        fmt((p1 - p0).norm()),
+        fmt((l1 - l0).norm() / l0.norm())
     );
     write_markdown(out, &scenario.name, &reference, &cells)?;
     write_plots(out, &scenario.name, &cells)?;

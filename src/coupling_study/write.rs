@@ -28,6 +28,8 @@ pub(super) fn write_csv(out: &Path, cells: &[Cell]) -> Result<()> {
         "err_vs_monolithic_0_3s",
         "err_vs_tau_dt_0_3s",
         "energy_drift_undriven",
+        "momentum_drift_undriven",
+        "angular_momentum_drift_undriven",
         "cost_per_step_vs_reset",
         "error",
     ])
@@ -42,6 +44,8 @@ pub(super) fn write_csv(out: &Path, cells: &[Cell]) -> Result<()> {
             c.err_mono.to_string(),
             c.err_dt.to_string(),
             c.energy_drift.to_string(),
+            c.momentum_drift.to_string(),
+            c.angular_drift.to_string(),
             cost_ratio(cells, c).to_string(),
             c.error.clone().unwrap_or_default(),
         ])
@@ -72,10 +76,13 @@ pub(super) fn write_markdown(
     let mut text = format!(
         "# Coupling study of {name}\n\nEach sample arrives τ late (latency = τ). Errors: RMS \
          over 0–3 s of the position error of the first and last body (the larger). \
-         Energy drift: relative change of kinetic energy over the undriven tail. Cost: \
-         wall time per step relative to `reset` at the same τ. {reference}\n\n\
+         Over the undriven tail: energy drift (relative change of kinetic energy, signed), \
+         momentum drift (|ΔP| [kg·m/s]) and angular-momentum drift (|ΔL|/|L|, about the \
+         centre of mass). Cost: wall time per step relative to `reset` at the same τ. \
+         {reference}\n\n\
          | scheme | distribution | τ [ms] | bounded | max \\|w\\| [m] | err vs monolithic [m] \
-         | err vs τ = dt [m] | energy drift | cost vs reset |\n|---|---|---|---|---|---|---|---|---|\n"
+         | err vs τ = dt [m] | energy drift | momentum drift | angular-momentum drift \
+         | cost vs reset |\n|---|---|---|---|---|---|---|---|---|---|---|\n"
     );
     for c in cells {
         let bounded = match &c.error {
@@ -83,7 +90,7 @@ pub(super) fn write_markdown(
             Some(e) => format!("no ({})", e.split(" on node").next().unwrap_or(e)),
         };
         text.push_str(&format!(
-            "| {} | {} | {} | {} | {:.3} | {} | {} | {} | {:.2} |\n",
+            "| {} | {} | {} | {} | {:.3} | {} | {} | {} | {} | {} | {:.2} |\n",
             c.scheme,
             c.distribution,
             c.tau * 1e3,
@@ -92,10 +99,46 @@ pub(super) fn write_markdown(
             fmt(c.err_mono),
             fmt(c.err_dt),
             fmt(c.energy_drift),
+            fmt(c.momentum_drift),
+            fmt(c.angular_drift),
             cost_ratio(cells, c)
         ));
     }
+    text.push_str(
+        "\nFitted order in τ of the error vs τ = dt (least squares on the logs over the \
+         bounded cells of each row):\n\n| scheme | distribution | order in τ | bounded cells |\n\
+         |---|---|---|---|\n",
+    );
+    for &(scheme, _) in &SCHEMES {
+        for &distribution in &DISTRIBUTIONS {
+            let points: Vec<(f64, f64)> = cells
+                .iter()
+                .filter(|c| c.scheme == scheme && c.distribution == distribution)
+                .filter(|c| c.bounded() && c.err_dt > 0.0 && c.err_dt.is_finite())
+                .map(|c| (c.tau.ln(), c.err_dt.ln()))
+                .collect();
+            text.push_str(&format!(
+                "| {scheme} | {distribution} | {} | {} |\n",
+                fitted_slope(&points).map_or("–".into(), |s| format!("{s:.2}")),
+                points.len()
+            ));
+        }
+    }
     write_atomic(&out.join("coupling.md"), text.as_bytes())
+}
+
+/// Least-squares slope of `y` against `x` (none below two distinct points).
+fn fitted_slope(points: &[(f64, f64)]) -> Option<f64> {
+    let n = points.len() as f64;
+    if points.len() < 2 {
+        return None;
+    }
+    let (mx, my) = points
+        .iter()
+        .fold((0.0, 0.0), |(a, b), (x, y)| (a + x / n, b + y / n));
+    let sxy: f64 = points.iter().map(|(x, y)| (x - mx) * (y - my)).sum();
+    let sxx: f64 = points.iter().map(|(x, _)| (x - mx) * (x - mx)).sum();
+    (sxx > 0.0).then(|| sxy / sxx)
 }
 
 pub(super) fn write_plots(out: &Path, name: &str, cells: &[Cell]) -> Result<()> {
@@ -164,5 +207,27 @@ pub(super) fn write_plots(out: &Path, name: &str, cells: &[Cell]) -> Result<()> 
         "max |w| over the run [m]",
         Scale::Linear,
         &series(&|c| c.max_w),
+    )?;
+    plot(
+        "energy_vs_tau.svg",
+        "kinetic energy drift over the undriven tail",
+        "relative change of kinetic energy, undriven tail [1]",
+        Scale::Linear,
+        &series(&|c| c.energy_drift),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fitted_slope;
+
+    #[test]
+    fn the_fitted_order_of_a_power_law_is_its_exponent() {
+        let points: Vec<(f64, f64)> = [0.003f64, 0.01, 0.05]
+            .iter()
+            .map(|t| (t.ln(), (7.0 * t * t).ln()))
+            .collect();
+        assert!((fitted_slope(&points).expect("three points") - 2.0).abs() < 1e-12);
+        assert_eq!(fitted_slope(&points[..1]), None);
+    }
 }
