@@ -3,11 +3,13 @@
 //!
 //! The estimates are upper bounds: a trace value is at most [`BYTES_PER_VALUE`] bytes of
 //! text (Rust's shortest round-trip form of an `f64` with its comma), a row holds `t`,
-//! `w` and `f` of every link and six values per traced body.
+//! `w` and `f` of every link, six values per traced body and the net's seven
+//! invariants.
 
 use crate::error::{Error, Result};
 use crate::kernel::SimTime;
 use crate::scenario::Scenario;
+use crate::trace::recorder::INVARIANT_COLUMNS;
 
 /// Largest text of one trace value with its separator [bytes] (`-1.2345678901234567e-308,`).
 pub const BYTES_PER_VALUE: u64 = 25;
@@ -95,8 +97,10 @@ impl Estimate {
         let decimation = scenario.output.decimation.max(1);
         // Every decimation-th step from step 0, and the last step always.
         let trace_rows = steps / decimation + 1 + u64::from(!steps.is_multiple_of(decimation));
-        let trace_columns =
-            1 + 2 * scenario.links.len() as u64 + 6 * scenario.output.trace_bodies.len() as u64;
+        let trace_columns = 1
+            + 2 * scenario.links.len() as u64
+            + 6 * scenario.output.trace_bodies.len() as u64
+            + INVARIANT_COLUMNS.len() as u64;
         let trace_bytes = trace_rows
             .saturating_mul(trace_columns)
             .saturating_mul(BYTES_PER_VALUE);
@@ -212,8 +216,8 @@ mod tests {
         // 1.234 s = 1234 steps; every 100th from 0 (13 rows) and the last one.
         let e = Estimate::of(&scene(1.234, 100), None);
         assert_eq!((e.steps, e.trace_rows), (1234, 14));
-        // t, w and f of 7 links, 6 values of each of 6 bodies.
-        assert_eq!(e.trace_columns, 1 + 14 + 36);
+        // t, w and f of 7 links, 6 values of each of 6 bodies, 7 invariants.
+        assert_eq!(e.trace_columns, 1 + 14 + 36 + 7);
         let dir = std::env::temp_dir().join(format!("dsmcosim-budget-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         crate::run::run(&scene(1.234, 100), &dir).expect("runs");

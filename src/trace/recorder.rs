@@ -1,6 +1,6 @@
 //! Per-step recording: the digest of every step, TDMA cycle and epoch row (see
-//! [`super::digest`]), decimated rows of `trace.csv`, and the few series the plots need
-//! (kept in memory; the full trace is streamed to disk).
+//! [`super::digest`]), decimated rows of `trace.csv` with the net's invariants, and the
+//! few series the plots need (kept in memory; the full trace is streamed to disk).
 
 use std::io::Write;
 
@@ -17,6 +17,11 @@ use crate::network::tdma::CycleReport;
 /// At most this many links get their own series in the constraint plot; larger models
 /// plot the envelope `max_l |w_l|` only.
 pub const MAX_PLOTTED_LINKS: usize = 24;
+
+/// The columns of the net's invariants on every trace row, after the bodies' (see
+/// [`super::Invariants`]): total momentum [kg·m/s], angular momentum about the centre of
+/// mass [kg·m²/s], kinetic energy [J].
+pub const INVARIANT_COLUMNS: [&str; 7] = ["Px", "Py", "Pz", "Lx", "Ly", "Lz", "KE"];
 
 /// Records a run's steps. Serializable (without its open file) so that a checkpoint
 /// carries the digest chain, the plot series and, when kept, the trace text so far.
@@ -106,6 +111,9 @@ impl Recorder {
                     head.push_str(&format!(",{ax}_B{id}"));
                 }
             }
+            for name in INVARIANT_COLUMNS {
+                head.push_str(&format!(",{name}"));
+            }
             r.line = format!("{head}\n");
             f.write_all(r.line.as_bytes())?;
             r.text_hash.update(r.line.as_bytes());
@@ -175,6 +183,13 @@ impl Recorder {
                 let _ = write!(self.line, ",{x}");
             }
         }
+        // A pass over the bodies, on the rows the trace keeps only.
+        let invariants = s.invariants();
+        let (m, l) = (&invariants.momentum, &invariants.angular_momentum);
+        for x in m.iter().chain(l.iter()) {
+            let _ = write!(self.line, ",{x}");
+        }
+        let _ = write!(self.line, ",{}", invariants.kinetic_energy);
         self.line.push('\n');
         if let Some(kept) = &mut self.kept {
             kept.push_str(&self.line);
@@ -407,6 +422,10 @@ mod tests {
                 f: &f,
                 p: &p,
                 v: &v,
+                q: &[],
+                omega: &[],
+                max_w: 0.9,
+                bodies: &[],
             })
             .unwrap();
         }

@@ -5,8 +5,9 @@
 //!   `wall_seconds`, `max_constraint_violation`, `mean_cost`; on a controlled run also
 //!   `mean_cost_<method>` for every method with an objective column in epochs.csv;
 //! - `trace.csv`: `t`, then `w_L<k>` and `f_L<k>` for every link `k = 1..links`, then
-//!   `px_B<i>,py_B<i>,pz_B<i>,vx_B<i>,vy_B<i>,vz_B<i>` per traced body; every value a
-//!   finite number, every row as wide as the header, `t` increasing;
+//!   `px_B<i>,py_B<i>,pz_B<i>,vx_B<i>,vy_B<i>,vz_B<i>` per traced body, then
+//!   `Px,Py,Pz,Lx,Ly,Lz,KE`; every value a finite number, every row as wide as the
+//!   header, `t` increasing;
 //! - `epochs.csv` (one row per measurement window): `t_start`, `t_end`, the requested
 //!   and achieved τ of every channel, `bandwidth`, `cost`; on a controlled run the
 //!   objective of every method (NaN where a method measured nothing in that window);
@@ -135,7 +136,20 @@ fn check_trace(dir: &Path, links: usize, out: &mut Vec<String>) {
             "trace.csv: the header does not start with t, w_L1..w_L{links}, f_L1..f_L{links}"
         ));
     }
-    let bodies = &head[expected.len().min(head.len())..];
+    let rest = &head[expected.len().min(head.len())..];
+    let invariants = ["Px", "Py", "Pz", "Lx", "Ly", "Lz", "KE"];
+    let Some(at) = rest.iter().position(|c| c == "Px") else {
+        out.push("trace.csv: no invariant columns Px..KE".into());
+        return;
+    };
+    let (bodies, rest) = rest.split_at(at);
+    if rest != invariants {
+        out.push(format!(
+            "trace.csv: the body columns are not followed by {} alone",
+            invariants.join(",")
+        ));
+        return;
+    }
     if bodies.is_empty() || bodies.len() % 6 != 0 {
         out.push(format!(
             "trace.csv: {} body columns, not a positive multiple of 6",
