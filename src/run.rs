@@ -93,16 +93,8 @@ pub fn run_with(scenario: &Scenario, out: &Path, options: RunOptions) -> Result<
     } else {
         Some(AtomicFile::create(&trace_path)?)
     };
-    let ids: Vec<u32> = scenario.bodies.iter().map(|b| b.id).collect();
-    let mut recorder = Recorder::new(
-        file,
-        scenario.output.decimation,
-        scenario.links.len(),
-        &ids,
-        &scenario.output.trace_bodies,
-        &scenario.output.plot_bodies,
-    )
-    .map_err(|e| Error::io(&trace_path, e))?;
+    let mut recorder =
+        Recorder::for_scenario(file, scenario).map_err(|e| Error::io(&trace_path, e))?;
     let world = CoSim::new(scenario);
     if world.tdma().is_some() {
         let path = out.join("network.csv");

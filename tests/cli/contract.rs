@@ -6,8 +6,10 @@
 //!   `mean_cost_<method>` for every method with an objective column in epochs.csv;
 //! - `trace.csv`: `t`, then `w_L<k>` and `f_L<k>` for every link `k = 1..links`, then
 //!   `px_B<i>,py_B<i>,pz_B<i>,vx_B<i>,vy_B<i>,vz_B<i>` per traced body, then
-//!   `Px,Py,Pz,Lx,Ly,Lz,KE`; every value a finite number, every row as wide as the
-//!   header, `t` increasing;
+//!   `Px,Py,Pz,Lx,Ly,Lz,KE`, then (with `output.trace_rotation`)
+//!   `qw_B<i>,qx_B<i>,qy_B<i>,qz_B<i>,wx_B<i>,wy_B<i>,wz_B<i>` per traced body in the
+//!   same order; every value a finite number, every row as wide as the header, `t`
+//!   increasing;
 //! - `epochs.csv` (one row per measurement window): `t_start`, `t_end`, the requested
 //!   and achieved τ of every channel, `bandwidth`, `cost`; on a controlled run the
 //!   objective of every method (NaN where a method measured nothing in that window);
@@ -143,12 +145,27 @@ fn check_trace(dir: &Path, links: usize, out: &mut Vec<String>) {
         return;
     };
     let (bodies, rest) = rest.split_at(at);
-    if rest != invariants {
+    if rest.len() < invariants.len() || rest[..invariants.len()] != invariants {
         out.push(format!(
-            "trace.csv: the body columns are not followed by {} alone",
+            "trace.csv: the body columns are not followed by {}",
             invariants.join(",")
         ));
         return;
+    }
+    let rotations = &rest[invariants.len()..];
+    if !rotations.is_empty() {
+        let want: Vec<String> = bodies
+            .chunks(6)
+            .flat_map(|g| {
+                let id = g[0].strip_prefix("px_B").unwrap_or("?").to_string();
+                ["qw", "qx", "qy", "qz", "wx", "wy", "wz"].map(|a| format!("{a}_B{id}"))
+            })
+            .collect();
+        if rotations != &want[..] {
+            out.push(format!(
+                "trace.csv: rotation columns {rotations:?} are not qw..wz of each traced body in order"
+            ));
+        }
     }
     if bodies.is_empty() || bodies.len() % 6 != 0 {
         out.push(format!(
