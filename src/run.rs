@@ -170,7 +170,14 @@ fn finish(
         events: world.events(),
     };
     write_epochs(out, &world, &experiment)?;
-    write_summary(out, &world, &outcome, result.as_ref().err(), &experiment)?;
+    let run = Ran {
+        world: &world,
+        recorder: &recorder,
+        outcome: &outcome,
+        failure: result.as_ref().err(),
+        experiment: &experiment,
+    };
+    write_summary(out, &run)?;
     write_plots(out, &world, &recorder)?;
     network::write_plots(out, &world, &recorder)?;
     if world.scenario().controller.is_some() {
@@ -313,13 +320,23 @@ fn divergence(e: &Error) -> Value {
     }
 }
 
-fn write_summary(
-    out: &Path,
-    world: &CoSim,
-    outcome: &Outcome,
-    failure: Option<&Error>,
-    exp: &Experiment,
-) -> Result<()> {
+/// What a finished (or diverged) run leaves for its summary.
+struct Ran<'a> {
+    world: &'a CoSim,
+    recorder: &'a Recorder,
+    outcome: &'a Outcome,
+    failure: Option<&'a Error>,
+    experiment: &'a Experiment,
+}
+
+fn write_summary(out: &Path, run: &Ran) -> Result<()> {
+    let Ran {
+        world,
+        recorder,
+        outcome,
+        failure,
+        experiment: exp,
+    } = *run;
     let scenario = world.scenario();
     let error = failure.map(ToString::to_string);
     let stabilizer = stabilizer_json(scenario);
@@ -388,6 +405,9 @@ fn write_summary(
         "solver": solver,
     });
     let mut summary = summary;
+    if let Some(invariants) = recorder.invariants_summary() {
+        summary["invariants"] = invariants;
+    }
     if let Some(p) = &scenario.partition {
         let mut ports = crate::partition::coupling::PortAccount::default();
         for node in world.nodes() {

@@ -5,6 +5,7 @@
 
 pub mod compare;
 pub mod digest;
+pub mod drift;
 pub mod invariants;
 pub mod network_log;
 pub mod plot_samples;

@@ -1,7 +1,8 @@
 //! Per-step recording: the digest of every step, TDMA cycle and epoch row (see
 //! [`super::digest`]), decimated rows of `trace.csv` with the net's invariants (and, on
-//! request, each traced body's rotation), and the few series the plots need (kept in
-//! memory; the full trace is streamed to disk).
+//! request, each traced body's rotation), the few series the plots need (kept in memory;
+//! the full trace is streamed to disk), and what summary.json reports of the invariants'
+//! drift ([`super::drift`]).
 
 use std::io::Write;
 
@@ -11,6 +12,7 @@ use crate::output::AtomicFile;
 use crate::report::Series;
 use crate::scenario::model::Scenario;
 
+use super::drift::{undriven_stretches, InvariantLog};
 use super::network_log::NetworkLog;
 use super::plot_samples::PlotSamples;
 use super::Digest;
@@ -67,6 +69,8 @@ pub struct Recorder {
     /// Whether each traced body's orientation and angular velocity go into the trace
     /// (`output.trace_rotation`).
     rotation: bool,
+    /// The invariants at the start, the end and the undriven stretches.
+    invariants: InvariantLog,
 }
 
 impl Recorder {
@@ -90,7 +94,8 @@ impl Recorder {
 
     /// The recorder `dsmcosim run` uses for `scenario`, writing `trace.csv` to `file`
     /// (or only digesting, if `None`): the scenario's decimation, traced and plotted
-    /// bodies and `trace_rotation`.
+    /// bodies and `trace_rotation`; the undriven stretches of its forces, followed for
+    /// summary.json.
     pub fn for_scenario(
         file: Option<AtomicFile>,
         scenario: &Scenario,
@@ -105,6 +110,7 @@ impl Recorder {
             &out.plot_bodies,
         );
         r.rotation = out.trace_rotation;
+        r.invariants = InvariantLog::new(&undriven_stretches(scenario));
         if let Some(f) = file {
             r.start_file(f, &ids)?;
         }
@@ -146,6 +152,7 @@ impl Recorder {
             },
             network: None,
             rotation: false,
+            invariants: InvariantLog::new(&[]),
         }
     }
 
@@ -199,7 +206,15 @@ impl Recorder {
         for (peak, w) in self.link_peaks.iter_mut().zip(s.w) {
             *peak = peak.max(w.abs());
         }
-        if !s.step.is_multiple_of(self.decimation) && !s.last {
+        let row = s.step.is_multiple_of(self.decimation) || s.last;
+        // The invariants cost a pass over the bodies: computed on the rows the trace
+        // keeps and the few steps summary.json needs, not on every step.
+        if !row && !self.invariants.wants(s.step) {
+            return Ok(());
+        }
+        let invariants = s.invariants();
+        self.invariants.record(s.step, s.time, invariants, row);
+        if !row {
             return Ok(());
         }
         self.rows += 1;
@@ -245,8 +260,6 @@ impl Recorder {
                 let _ = write!(self.line, ",{x}");
             }
         }
-        // A pass over the bodies, on the rows the trace keeps only.
-        let invariants = s.invariants();
         let (m, l) = (&invariants.momentum, &invariants.angular_momentum);
         for x in m.iter().chain(l.iter()) {
             let _ = write!(self.line, ",{x}");
@@ -287,6 +300,11 @@ impl Recorder {
     /// Rows written to the trace.
     pub fn rows(&self) -> u64 {
         self.rows
+    }
+
+    /// summary.json's `invariants` ([`InvariantLog::summary`]); `None` before any step.
+    pub fn invariants_summary(&self) -> Option<serde_json::Value> {
+        self.invariants.summary()
     }
 
     /// Keeps a copy of every trace line from now on (the header included), for

@@ -4,6 +4,8 @@
 //! - `summary.json`: `scenario`, `seed`, `digest` (64 hex digits), `steps`, `sim_seconds`,
 //!   `wall_seconds`, `max_constraint_violation`, `mean_cost`; on a controlled run also
 //!   `mean_cost_<method>` for every method with an objective column in epochs.csv;
+//! - `summary.json` also: `invariants` with `start` and `end` (`t`, `momentum`,
+//!   `angular_momentum`, `kinetic_energy`) and the drift fields;
 //! - `trace.csv`: `t`, then `w_L<k>` and `f_L<k>` for every link `k = 1..links`, then
 //!   `px_B<i>,py_B<i>,pz_B<i>,vx_B<i>,vy_B<i>,vz_B<i>` per traced body, then
 //!   `Px,Py,Pz,Lx,Ly,Lz,KE`, then (with `output.trace_rotation`)
@@ -70,6 +72,32 @@ fn check_summary(s: &Value, out: &mut Vec<String>) {
                 "summary.json: '{key}' is missing or not a finite number ≥ 0 (got {})",
                 s[key]
             )),
+        }
+    }
+    let inv = &s["invariants"];
+    for end in ["start", "end"] {
+        let e = &inv[end];
+        let vector = |k: &str| {
+            e[k].as_array()
+                .is_some_and(|a| a.len() == 3 && a.iter().all(Value::is_f64))
+        };
+        let complete = e["t"].is_f64()
+            && vector("momentum")
+            && vector("angular_momentum")
+            && e["kinetic_energy"].as_f64().is_some_and(|x| x >= 0.0);
+        if !complete {
+            out.push(format!(
+                "summary.json: 'invariants.{end}' lacks t, momentum, angular_momentum or kinetic_energy ≥ 0: {e}"
+            ));
+        }
+    }
+    for key in [
+        "momentum_drift",
+        "angular_momentum_drift",
+        "kinetic_energy_drift",
+    ] {
+        if inv.get(key).is_none() {
+            out.push(format!("summary.json: no 'invariants.{key}'"));
         }
     }
     let digest = s["digest"].as_str().unwrap_or("");
