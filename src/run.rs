@@ -51,6 +51,9 @@ pub struct Outcome {
     /// so a resumed run whose checkpoint carried edited trace lines shows a different
     /// `trace_digest` from the uninterrupted run's even where `digest` agrees.
     pub trace_digest: Option<String>,
+    /// The SMC boundary layer's account (`None` under Baumgarte): how many steps some
+    /// link's `|w|` spent beyond `ε`, and the worst.
+    pub boundary_layer: Option<crate::trace::drift::LayerWatch>,
 }
 
 /// Options of a run beyond its scenario.
@@ -168,6 +171,7 @@ fn finish(
         wall_seconds,
         messages: world.messages(),
         events: world.events(),
+        boundary_layer: recorder.boundary_layer().cloned(),
     };
     write_epochs(out, &world, &experiment)?;
     let run = Ran {
@@ -407,6 +411,9 @@ fn write_summary(out: &Path, run: &Ran) -> Result<()> {
     let mut summary = summary;
     if let Some(invariants) = recorder.invariants_summary() {
         summary["invariants"] = invariants;
+    }
+    if let Some(layer) = recorder.boundary_layer() {
+        summary["boundary_layer"] = layer.summary();
     }
     if let Some(p) = &scenario.partition {
         let mut ports = crate::partition::coupling::PortAccount::default();

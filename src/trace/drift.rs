@@ -1,16 +1,18 @@
-//! What a run's summary.json says about its invariants: accumulated by the recorder
-//! step by step (and checkpointed with it, so a resumed run reports the same), reported
-//! as `invariants`.
+//! What a run's summary.json says about its invariants and its SMC boundary layer:
+//! accumulated by the recorder step by step (and checkpointed with it, so a resumed run
+//! reports the same), reported as `invariants` and `boundary_layer`.
 //!
 //! - [`InvariantLog`]: the net's [`Invariants`] at the first step, at the last trace row
 //!   and at both ends of every undriven stretch, and their drift between those.
+//! - [`LayerWatch`]: the steps at which some link's `|w|` is outside the SMC boundary
+//!   layer `ε`, and the worst `|w|`.
 
 use nalgebra::Vector3;
 use serde_json::{json, Map, Value};
 
 use super::Invariants;
 use crate::kernel::SimTime;
-use crate::scenario::model::Scenario;
+use crate::scenario::model::{Scenario, Stabilizer};
 
 /// The invariants at one step.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -203,6 +205,83 @@ fn drift_json(a: &Invariants, b: &Invariants) -> Map<String, Value> {
     m
 }
 
+/// Steps at which the largest `|w|` is outside the SMC boundary layer `ε`.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct LayerWatch {
+    /// `stabilizer.epsilon` [m].
+    pub epsilon: f64,
+    /// Steps recorded.
+    pub steps: u64,
+    /// Steps at which some link had `|w| > ε`.
+    pub outside: u64,
+    /// Largest `|w|` at any recorded step [m].
+    pub worst: f64,
+    /// Time of the first step with that `|w|`.
+    pub worst_time: Option<SimTime>,
+}
+
+impl LayerWatch {
+    /// A watch of `scenario`'s boundary layer; `None` unless its stabilizer is SMC.
+    pub fn new(scenario: &Scenario) -> Option<LayerWatch> {
+        match scenario.stabilizer {
+            Stabilizer::Smc { epsilon, .. } => Some(LayerWatch {
+                epsilon,
+                steps: 0,
+                outside: 0,
+                worst: 0.0,
+                worst_time: None,
+            }),
+            Stabilizer::Baumgarte { .. } => None,
+        }
+    }
+
+    /// Counts a step at `t` whose largest `|w|` is `max_w` [m].
+    #[inline]
+    pub fn record(&mut self, t: SimTime, max_w: f64) {
+        self.steps += 1;
+        if max_w > self.epsilon {
+            self.outside += 1;
+        }
+        if max_w > self.worst || self.worst_time.is_none() {
+            self.worst = max_w;
+            self.worst_time = Some(t);
+        }
+    }
+
+    /// Share of the recorded steps outside the layer [1].
+    pub fn share_outside(&self) -> f64 {
+        self.outside as f64 / self.steps.max(1) as f64
+    }
+
+    /// summary.json's `boundary_layer`.
+    pub fn summary(&self) -> Value {
+        json!({
+            "epsilon": self.epsilon,
+            "steps_outside": self.outside,
+            "share_outside": self.share_outside(),
+            "worst": self.worst,
+            "worst_time": self.worst_time.map(SimTime::as_secs_f64),
+        })
+    }
+
+    /// The line the command line prints when the run left the layer; `None` if it
+    /// never did.
+    pub fn warning(&self) -> Option<String> {
+        (self.outside > 0).then(|| {
+            format!(
+                "max |w| left the SMC boundary layer ε = {} m on {} of {} steps ({:.3} %); \
+                 worst |w| = {:.3e} m at t = {} s (summary.json: boundary_layer)",
+                self.epsilon,
+                self.outside,
+                self.steps,
+                100.0 * self.share_outside(),
+                self.worst,
+                self.worst_time.map_or(0.0, SimTime::as_secs_f64),
+            )
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -262,5 +341,25 @@ mod tests {
         assert!(undriven_stretches(&s).is_empty());
         let s = scene(json!([force(0.0, None)]), 1.0);
         assert!(undriven_stretches(&s).is_empty());
+    }
+
+    #[test]
+    fn the_watch_counts_steps_outside_and_keeps_the_first_worst() {
+        let mut w = LayerWatch {
+            epsilon: 0.1,
+            steps: 0,
+            outside: 0,
+            worst: 0.0,
+            worst_time: None,
+        };
+        for (k, x) in [0.05, 0.2, 0.1, 0.3, 0.3, 0.0].into_iter().enumerate() {
+            w.record(SimTime(k as u64), x);
+        }
+        assert_eq!((w.steps, w.outside), (6, 3));
+        assert_eq!((w.worst, w.worst_time), (0.3, Some(SimTime(3))));
+        assert!(w.warning().unwrap().contains("on 3 of 6 steps (50.000 %)"));
+        let mut inside = w.clone();
+        inside.outside = 0;
+        assert!(inside.warning().is_none());
     }
 }

@@ -2,7 +2,7 @@
 //! [`super::digest`]), decimated rows of `trace.csv` with the net's invariants (and, on
 //! request, each traced body's rotation), the few series the plots need (kept in memory;
 //! the full trace is streamed to disk), and what summary.json reports of the invariants'
-//! drift ([`super::drift`]).
+//! drift and the SMC boundary layer ([`super::drift`]).
 
 use std::io::Write;
 
@@ -12,7 +12,7 @@ use crate::output::AtomicFile;
 use crate::report::Series;
 use crate::scenario::model::Scenario;
 
-use super::drift::{undriven_stretches, InvariantLog};
+use super::drift::{undriven_stretches, InvariantLog, LayerWatch};
 use super::network_log::NetworkLog;
 use super::plot_samples::PlotSamples;
 use super::Digest;
@@ -71,6 +71,8 @@ pub struct Recorder {
     rotation: bool,
     /// The invariants at the start, the end and the undriven stretches.
     invariants: InvariantLog,
+    /// The SMC boundary layer's account (SMC runs built with [`Recorder::for_scenario`]).
+    layer: Option<LayerWatch>,
 }
 
 impl Recorder {
@@ -94,8 +96,8 @@ impl Recorder {
 
     /// The recorder `dsmcosim run` uses for `scenario`, writing `trace.csv` to `file`
     /// (or only digesting, if `None`): the scenario's decimation, traced and plotted
-    /// bodies and `trace_rotation`; the undriven stretches of its forces, followed for
-    /// summary.json.
+    /// bodies and `trace_rotation`; the undriven stretches of its forces, and on SMC its
+    /// boundary layer, followed for summary.json.
     pub fn for_scenario(
         file: Option<AtomicFile>,
         scenario: &Scenario,
@@ -111,6 +113,7 @@ impl Recorder {
         );
         r.rotation = out.trace_rotation;
         r.invariants = InvariantLog::new(&undriven_stretches(scenario));
+        r.layer = LayerWatch::new(scenario);
         if let Some(f) = file {
             r.start_file(f, &ids)?;
         }
@@ -153,6 +156,7 @@ impl Recorder {
             network: None,
             rotation: false,
             invariants: InvariantLog::new(&[]),
+            layer: None,
         }
     }
 
@@ -205,6 +209,9 @@ impl Recorder {
         d.end_step();
         for (peak, w) in self.link_peaks.iter_mut().zip(s.w) {
             *peak = peak.max(w.abs());
+        }
+        if let Some(layer) = &mut self.layer {
+            layer.record(s.time, s.max_w);
         }
         let row = s.step.is_multiple_of(self.decimation) || s.last;
         // The invariants cost a pass over the bodies: computed on the rows the trace
@@ -305,6 +312,12 @@ impl Recorder {
     /// summary.json's `invariants` ([`InvariantLog::summary`]); `None` before any step.
     pub fn invariants_summary(&self) -> Option<serde_json::Value> {
         self.invariants.summary()
+    }
+
+    /// The SMC boundary layer's account; `None` under Baumgarte or for a recorder not
+    /// built with [`Recorder::for_scenario`].
+    pub fn boundary_layer(&self) -> Option<&LayerWatch> {
+        self.layer.as_ref()
     }
 
     /// Keeps a copy of every trace line from now on (the header included), for

@@ -5,7 +5,9 @@
 //!   `wall_seconds`, `max_constraint_violation`, `mean_cost`; on a controlled run also
 //!   `mean_cost_<method>` for every method with an objective column in epochs.csv;
 //! - `summary.json` also: `invariants` with `start` and `end` (`t`, `momentum`,
-//!   `angular_momentum`, `kinetic_energy`) and the drift fields;
+//!   `angular_momentum`, `kinetic_energy`) and the drift fields; on SMC runs
+//!   `boundary_layer` (`epsilon`, `steps_outside`, `share_outside`, `worst`,
+//!   `worst_time`);
 //! - `trace.csv`: `t`, then `w_L<k>` and `f_L<k>` for every link `k = 1..links`, then
 //!   `px_B<i>,py_B<i>,pz_B<i>,vx_B<i>,vy_B<i>,vz_B<i>` per traced body, then
 //!   `Px,Py,Pz,Lx,Ly,Lz,KE`, then (with `output.trace_rotation`)
@@ -98,6 +100,20 @@ fn check_summary(s: &Value, out: &mut Vec<String>) {
     ] {
         if inv.get(key).is_none() {
             out.push(format!("summary.json: no 'invariants.{key}'"));
+        }
+    }
+    if s["stabilizer"]["kind"] == "smc" {
+        let b = &s["boundary_layer"];
+        let fine = b["epsilon"].as_f64() == s["stabilizer"]["epsilon"].as_f64()
+            && b["steps_outside"].as_u64().is_some_and(|n| {
+                let share = n as f64 / (s["steps"].as_f64().unwrap_or(0.0) + 1.0);
+                b["share_outside"].as_f64() == Some(share)
+            })
+            && b["worst"].as_f64() == s["max_constraint_violation"].as_f64();
+        if !fine {
+            out.push(format!(
+                "summary.json: 'boundary_layer' does not match the stabilizer, the steps and max |w|: {b}"
+            ));
         }
     }
     let digest = s["digest"].as_str().unwrap_or("");

@@ -5,6 +5,7 @@ use std::process::{Command, Output};
 
 use serde_json::{json, Value};
 
+mod boundary_layer;
 mod check;
 mod contract;
 mod corpus;
