@@ -56,7 +56,8 @@ def load_run(run_dir):
     trace = pd.read_csv(run_dir / "trace.csv")
     epochs = pd.read_csv(run_dir / "epochs.csv")
     summary = json.loads((run_dir / "summary.json").read_text())
-    # Every trace column is a number: t [s], w_L<k> and f_L<k> per link, p/v per body.
+    # Every trace column is a number: t [s], w_L<k> and f_L<k> per link, p/v per body,
+    # the invariants Px..KE (and qw..wz per body with output.trace_rotation).
     require_numeric(trace, trace.columns, "trace.csv")
     # So is every epochs.csv column (times, delays, bandwidth, cost, objectives).
     require_numeric(epochs, epochs.columns, "epochs.csv")

@@ -354,6 +354,9 @@ fn report(name: &str, outcome: &crate::run::Outcome, out: &std::path::Path) {
         outcome.digest
     );
     say!("wrote {}", out.display());
+    if let Some(w) = outcome.boundary_layer.as_ref().and_then(|l| l.warning()) {
+        eprintln!("warning: {w}");
+    }
 }
 
 /// Whether `path` holds a sweep file (a JSON object with `axes` and `base`) rather than

@@ -51,6 +51,9 @@ pub struct Outcome {
     /// so a resumed run whose checkpoint carried edited trace lines shows a different
     /// `trace_digest` from the uninterrupted run's even where `digest` agrees.
     pub trace_digest: Option<String>,
+    /// The SMC boundary layer's account (`None` under Baumgarte): how many steps some
+    /// link's `|w|` spent beyond `ε`, and the worst.
+    pub boundary_layer: Option<crate::trace::drift::LayerWatch>,
 }
 
 /// Options of a run beyond its scenario.
@@ -93,16 +96,8 @@ pub fn run_with(scenario: &Scenario, out: &Path, options: RunOptions) -> Result<
     } else {
         Some(AtomicFile::create(&trace_path)?)
     };
-    let ids: Vec<u32> = scenario.bodies.iter().map(|b| b.id).collect();
-    let mut recorder = Recorder::new(
-        file,
-        scenario.output.decimation,
-        scenario.links.len(),
-        &ids,
-        &scenario.output.trace_bodies,
-        &scenario.output.plot_bodies,
-    )
-    .map_err(|e| Error::io(&trace_path, e))?;
+    let mut recorder =
+        Recorder::for_scenario(file, scenario).map_err(|e| Error::io(&trace_path, e))?;
     let world = CoSim::new(scenario);
     if world.tdma().is_some() {
         let path = out.join("network.csv");
@@ -176,9 +171,17 @@ fn finish(
         wall_seconds,
         messages: world.messages(),
         events: world.events(),
+        boundary_layer: recorder.boundary_layer().cloned(),
     };
     write_epochs(out, &world, &experiment)?;
-    write_summary(out, &world, &outcome, result.as_ref().err(), &experiment)?;
+    let run = Ran {
+        world: &world,
+        recorder: &recorder,
+        outcome: &outcome,
+        failure: result.as_ref().err(),
+        experiment: &experiment,
+    };
+    write_summary(out, &run)?;
     write_plots(out, &world, &recorder)?;
     network::write_plots(out, &world, &recorder)?;
     if world.scenario().controller.is_some() {
@@ -321,13 +324,23 @@ fn divergence(e: &Error) -> Value {
     }
 }
 
-fn write_summary(
-    out: &Path,
-    world: &CoSim,
-    outcome: &Outcome,
-    failure: Option<&Error>,
-    exp: &Experiment,
-) -> Result<()> {
+/// What a finished (or diverged) run leaves for its summary.
+struct Ran<'a> {
+    world: &'a CoSim,
+    recorder: &'a Recorder,
+    outcome: &'a Outcome,
+    failure: Option<&'a Error>,
+    experiment: &'a Experiment,
+}
+
+fn write_summary(out: &Path, run: &Ran) -> Result<()> {
+    let Ran {
+        world,
+        recorder,
+        outcome,
+        failure,
+        experiment: exp,
+    } = *run;
     let scenario = world.scenario();
     let error = failure.map(ToString::to_string);
     let stabilizer = stabilizer_json(scenario);
@@ -396,6 +409,12 @@ fn write_summary(
         "solver": solver,
     });
     let mut summary = summary;
+    if let Some(invariants) = recorder.invariants_summary() {
+        summary["invariants"] = invariants;
+    }
+    if let Some(layer) = recorder.boundary_layer() {
+        summary["boundary_layer"] = layer.summary();
+    }
     if let Some(p) = &scenario.partition {
         let mut ports = crate::partition::coupling::PortAccount::default();
         for node in world.nodes() {

@@ -1,13 +1,17 @@
 //! What a run records: the bit-exact digest ([`digest`]) and the decimated CSV trace
-//! with the series kept for plots ([`recorder`]); and the record-by-record comparison
+//! with the series kept for plots ([`recorder`]), with the net's momenta and energy
+//! ([`invariants`]) beside the state; and the record-by-record comparison
 //! of two runs' CSV files ([`compare`], used by `dsmcosim check`).
 
 pub mod compare;
 pub mod digest;
+pub mod drift;
+pub mod invariants;
 pub mod network_log;
 pub mod plot_samples;
 pub mod recorder;
 
 pub use digest::Digest;
+pub use invariants::Invariants;
 pub use network_log::NetworkLog;
 pub use recorder::Recorder;

@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 
-use nalgebra::Vector3;
+use nalgebra::{Quaternion, Vector3};
 use rayon::prelude::*;
 
 use super::{Event, TdmaLink};
@@ -16,7 +16,8 @@ use crate::network::tdma::{tdma_node, CycleReport, TdmaError};
 use crate::network::{Channel, Message, Payload};
 use crate::partition::line::LineSet;
 use crate::partition::{Layout, Node};
-use crate::scenario::model::{DataKind, NetworkSpec, Scenario};
+use crate::scenario::model::{BodyModel, BodySpec, DataKind, NetworkSpec, Scenario};
+use crate::trace::Invariants;
 
 /// The values of one step, as observers (trace recorder, digest) see them: the whole
 /// model, gathered from the nodes that own each link and body.
@@ -35,6 +36,23 @@ pub struct StepValues<'a> {
     pub p: &'a [Vector3<f64>],
     /// Body velocities [m/s].
     pub v: &'a [Vector3<f64>],
+    /// Body orientations (body → world, unit quaternions); empty on the point-mass path.
+    pub q: &'a [Quaternion<f64>],
+    /// Body angular velocities in the world frame [rad/s]; empty on the point-mass path.
+    pub omega: &'a [Vector3<f64>],
+    /// Largest `|w|` over the links at this step [m] (0 without links).
+    pub max_w: f64,
+    /// The bodies (masses and inertias, for [`StepValues::invariants`]).
+    pub bodies: &'a [BodySpec],
+}
+
+impl StepValues<'_> {
+    /// The net's momenta and kinetic energy at this step, from the owner copy of every
+    /// body. Computed on demand (the recorder asks on the rows it keeps), not on every
+    /// step.
+    pub fn invariants(&self) -> Invariants {
+        Invariants::of(self.bodies, self.p, self.v, self.q, self.omega)
+    }
 }
 
 /// Something that watches every step (the recorder; nothing for a what-if fork).
@@ -169,6 +187,10 @@ pub struct CoSim {
     f: Vec<f64>,
     p: Vec<Vector3<f64>>,
     v: Vec<Vector3<f64>>,
+    /// Each body's orientation and angular velocity, gathered like `p` and `v` (empty on
+    /// the point-mass path).
+    q: Vec<Quaternion<f64>>,
+    omega: Vec<Vector3<f64>>,
     steps_done: u64,
     /// The next lock-step, the one pending event of class `PartitionStep`. It is kept
     /// beside the queue rather than in it: nothing else has that class, so it runs when
@@ -265,6 +287,11 @@ impl CoSim {
             Event::WindowEnd,
         );
         let (nl, nb) = (scenario.links.len(), scenario.bodies.len());
+        let nr = if scenario.body_model == BodyModel::Rigid {
+            nb
+        } else {
+            0
+        };
         CoSim {
             meter: CostMeter::new(nl, scenario.dt),
             scenario: Arc::new(scenario.clone()),
@@ -281,6 +308,8 @@ impl CoSim {
             f: vec![0.0; nl],
             p: vec![Vector3::zeros(); nb],
             v: vec![Vector3::zeros(); nb],
+            q: vec![Quaternion::identity(); nr],
+            omega: vec![Vector3::zeros(); nr],
             steps_done: 0,
             next_step: Some(SimTime::ZERO),
             messages: 0,
@@ -758,12 +787,12 @@ impl CoSim {
             System::begin_steps(t, nodes)
         }
         .map_err(|(n, e)| self.eval_error(t, n, e))?;
-        if parallel {
-            self.gather_check_parallel(t)?;
+        let max_w = if parallel {
+            self.gather_check_parallel(t)?
         } else {
             self.gather();
-            self.check(t)?;
-        }
+            self.check(t)?
+        };
         let values = StepValues {
             step: k,
             time: t,
@@ -772,6 +801,10 @@ impl CoSim {
             f: &self.f,
             p: &self.p,
             v: &self.v,
+            q: &self.q,
+            omega: &self.omega,
+            max_w,
+            bodies: &self.scenario.bodies,
         };
         obs.on_step(&values)
             .map_err(|e| Error::io("trace.csv", e))?;
@@ -803,6 +836,8 @@ impl CoSim {
             }
             self.p.copy_from_slice(&node.state.p);
             self.v.copy_from_slice(&node.state.v);
+            self.q.copy_from_slice(&node.state.q);
+            self.omega.copy_from_slice(&node.state.omega);
             return;
         }
         for l in 0..self.w.len() {
@@ -818,37 +853,44 @@ impl CoSim {
             self.p[b] = self.nodes[n].state.p[lb];
             self.v[b] = self.nodes[n].state.v[lb];
         }
+        gather_rotations(&mut self.q, &mut self.omega, &self.nodes, &self.body_home);
     }
 
-    /// Divergence check of the gathered values at `t`.
-    fn check(&mut self, t: SimTime) -> Result<()> {
+    /// Divergence check of the gathered values at `t`; the step's largest `|w|`.
+    fn check(&mut self, t: SimTime) -> Result<f64> {
         let bound = self.scenario.max_violation;
+        let mut max = 0.0f64;
         for (l, (&w, &f)) in self.w.iter().zip(&self.f).enumerate() {
             match link_fault(w, f, bound) {
-                None => self.max_violation = self.max_violation.max(w.abs()),
-                Some(what) => return Err(self.link_diverged(t, l, what)),
+                None => max = max.max(w.abs()),
+                Some(what) => {
+                    self.max_violation = self.max_violation.max(max);
+                    return Err(self.link_diverged(t, l, what));
+                }
             }
         }
+        self.max_violation = self.max_violation.max(max);
         for (b, (p, v)) in self.p.iter().zip(&self.v).enumerate() {
             if !body_finite(p, v) {
                 return Err(self.body_diverged(t, b));
             }
         }
-        Ok(())
+        Ok(max)
     }
 
     /// [`gather`](Self::gather) and [`check`](Self::check) on rayon's threads, in chunks
     /// of links and of bodies: the same copies, and the same reduction in link then
     /// body order after the parallel part (the largest `|w|` of the links before the
     /// first that fails, which is exact in any grouping, then that link's error, else
-    /// the first non-finite body's).
-    fn gather_check_parallel(&mut self, t: SimTime) -> Result<()> {
+    /// the first non-finite body's); the step's largest `|w|`.
+    fn gather_check_parallel(&mut self, t: SimTime) -> Result<f64> {
         const CHUNK: usize = 512;
         let bound = self.scenario.max_violation;
         let (nodes, scenario) = (&self.nodes, &*self.scenario);
         let (link_home, line_ends) = (&self.link_home, &self.line_ends);
         let body_home = &self.body_home;
         let (w, f, p, v) = (&mut self.w, &mut self.f, &mut self.p, &mut self.v);
+        let (q, omega) = (&mut self.q, &mut self.omega);
         let (links, bodies) = rayon::join(
             || {
                 w.par_chunks_mut(CHUNK)
@@ -872,7 +914,8 @@ impl CoSim {
                     .collect::<Vec<_>>()
             },
             || {
-                p.par_chunks_mut(CHUNK)
+                let faults = p
+                    .par_chunks_mut(CHUNK)
                     .zip(v.par_chunks_mut(CHUNK))
                     .enumerate()
                     .map(|(c, (p, v))| {
@@ -888,18 +931,25 @@ impl CoSim {
                         }
                         fault
                     })
-                    .collect::<Vec<_>>()
+                    .collect::<Vec<_>>();
+                // Rotations: copies only, nothing to check (serial: a rigid scene large
+                // enough to step in parallel spends far more per step on its solve).
+                gather_rotations(q, omega, nodes, body_home);
+                faults
             },
         );
+        let mut step_max = 0.0f64;
         for (max, fault) in links {
-            self.max_violation = self.max_violation.max(max);
+            step_max = step_max.max(max);
             if let Some((l, what)) = fault {
+                self.max_violation = self.max_violation.max(step_max);
                 return Err(self.link_diverged(t, l, what));
             }
         }
+        self.max_violation = self.max_violation.max(step_max);
         match bodies.into_iter().flatten().next() {
             Some(b) => Err(self.body_diverged(t, b)),
-            None => Ok(()),
+            None => Ok(step_max),
         }
     }
 
@@ -1072,6 +1122,20 @@ fn link_fault_text(w: f64, f: f64, bound: f64) -> String {
         format!("non-finite w = {w} or f = {f}")
     } else {
         format!("|w| = {} m exceeds the bound {bound} m", w.abs())
+    }
+}
+
+/// Copies each body's orientation and angular velocity from its owner copy (nothing on
+/// the point-mass path, where `q` and `omega` are empty).
+fn gather_rotations(
+    q: &mut [Quaternion<f64>],
+    omega: &mut [Vector3<f64>],
+    nodes: &[Node],
+    body_home: &[(usize, usize)],
+) {
+    for ((q, w), &(n, lb)) in q.iter_mut().zip(omega.iter_mut()).zip(body_home) {
+        *q = nodes[n].state.q[lb];
+        *w = nodes[n].state.omega[lb];
     }
 }
 

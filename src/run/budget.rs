@@ -3,11 +3,13 @@
 //!
 //! The estimates are upper bounds: a trace value is at most [`BYTES_PER_VALUE`] bytes of
 //! text (Rust's shortest round-trip form of an `f64` with its comma), a row holds `t`,
-//! `w` and `f` of every link and six values per traced body.
+//! `w` and `f` of every link, six values per traced body, the net's seven invariants
+//! and, with `output.trace_rotation`, seven more per traced body.
 
 use crate::error::{Error, Result};
 use crate::kernel::SimTime;
 use crate::scenario::Scenario;
+use crate::trace::recorder::{INVARIANT_COLUMNS, ROTATION_COLUMNS};
 
 /// Largest text of one trace value with its separator [bytes] (`-1.2345678901234567e-308,`).
 pub const BYTES_PER_VALUE: u64 = 25;
@@ -95,8 +97,15 @@ impl Estimate {
         let decimation = scenario.output.decimation.max(1);
         // Every decimation-th step from step 0, and the last step always.
         let trace_rows = steps / decimation + 1 + u64::from(!steps.is_multiple_of(decimation));
-        let trace_columns =
-            1 + 2 * scenario.links.len() as u64 + 6 * scenario.output.trace_bodies.len() as u64;
+        let per_body = if scenario.output.trace_rotation {
+            6 + ROTATION_COLUMNS.len()
+        } else {
+            6
+        } as u64;
+        let trace_columns = 1
+            + 2 * scenario.links.len() as u64
+            + per_body * scenario.output.trace_bodies.len() as u64
+            + INVARIANT_COLUMNS.len() as u64;
         let trace_bytes = trace_rows
             .saturating_mul(trace_columns)
             .saturating_mul(BYTES_PER_VALUE);
@@ -212,8 +221,8 @@ mod tests {
         // 1.234 s = 1234 steps; every 100th from 0 (13 rows) and the last one.
         let e = Estimate::of(&scene(1.234, 100), None);
         assert_eq!((e.steps, e.trace_rows), (1234, 14));
-        // t, w and f of 7 links, 6 values of each of 6 bodies.
-        assert_eq!(e.trace_columns, 1 + 14 + 36);
+        // t, w and f of 7 links, 6 values of each of 6 bodies, 7 invariants.
+        assert_eq!(e.trace_columns, 1 + 14 + 36 + 7);
         let dir = std::env::temp_dir().join(format!("dsmcosim-budget-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         crate::run::run(&scene(1.234, 100), &dir).expect("runs");
@@ -232,6 +241,13 @@ mod tests {
         let _ = std::fs::remove_dir_all(&dir);
         // A multiple of the decimation has no extra last row.
         assert_eq!(Estimate::of(&scene(1.2, 100), None).trace_rows, 13);
+        // With each traced body's rotation: 7 more values per body.
+        let mut rotating = scene(1.234, 100);
+        rotating.output.trace_rotation = true;
+        assert_eq!(
+            Estimate::of(&rotating, None).trace_columns,
+            e.trace_columns + 7 * 6
+        );
     }
 
     /// The profile of `J M⁻¹ Jᵀ` in link order (row `k` from the lowest link sharing a

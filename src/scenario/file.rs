@@ -496,6 +496,14 @@ pub struct OutputFile {
         skip_serializing_if = "Option::is_none"
     )]
     pub trace_bodies: Option<Vec<u32>>,
+    /// `true`: trace.csv also holds each traced body's orientation quaternion (body →
+    /// world) `qw_B<id>,qx_B<id>,qy_B<id>,qz_B<id>` and world angular velocity
+    /// `wx_B<id>,wy_B<id>,wz_B<id>` [rad/s], seven columns per traced body after the
+    /// invariants (identity and zero on the point-mass path, which has no rotation
+    /// state). Default `false`: most scenes are point masses, and a rigid one's
+    /// rotation is needed only to study it; the trace stays 7 columns per body smaller.
+    #[serde(default)]
+    pub trace_rotation: bool,
     /// Ids of the bodies drawn in the body-coordinate plot; default the first and the
     /// last body in file order (the driven opposite corners of the thesis grid), or the
     /// only body.
@@ -527,6 +535,7 @@ impl Default for OutputFile {
         OutputFile {
             decimation: default_decimation(),
             trace_bodies: None,
+            trace_rotation: false,
             plot_bodies: None,
             network_decimation: default_network_decimation(),
             timeline_cycles: default_timeline_cycles(),

@@ -228,6 +228,9 @@ pub struct OutputSpec {
     pub decimation: u64,
     /// Indices of the bodies whose coordinates go into trace.csv.
     pub trace_bodies: Vec<usize>,
+    /// Whether trace.csv also holds each traced body's orientation quaternion and
+    /// angular velocity (identity and zero on the point-mass path).
+    pub trace_rotation: bool,
     /// Indices of the bodies drawn in the body-coordinate plot.
     pub plot_bodies: Vec<usize>,
     /// TDMA: network.csv keeps every frame of every n-th cycle (plus every lost frame

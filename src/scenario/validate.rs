@@ -555,6 +555,7 @@ fn output(o: &OutputFile, ids: &Ids, body_count: usize) -> Result<OutputSpec> {
     Ok(OutputSpec {
         decimation: o.decimation,
         trace_bodies,
+        trace_rotation: o.trace_rotation,
         plot_bodies,
         network_decimation: o.network_decimation,
         timeline_cycles: o.timeline_cycles,

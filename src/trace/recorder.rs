@@ -1,6 +1,8 @@
 //! Per-step recording: the digest of every step, TDMA cycle and epoch row (see
-//! [`super::digest`]), decimated rows of `trace.csv`, and the few series the plots need
-//! (kept in memory; the full trace is streamed to disk).
+//! [`super::digest`]), decimated rows of `trace.csv` with the net's invariants (and, on
+//! request, each traced body's rotation), the few series the plots need (kept in memory;
+//! the full trace is streamed to disk), and what summary.json reports of the invariants'
+//! drift and the SMC boundary layer ([`super::drift`]).
 
 use std::io::Write;
 
@@ -8,7 +10,9 @@ use crate::control::experiment::WindowReport;
 use crate::cosim::{EpochRecord, Observer, StepValues};
 use crate::output::AtomicFile;
 use crate::report::Series;
+use crate::scenario::model::Scenario;
 
+use super::drift::{undriven_stretches, InvariantLog, LayerWatch};
 use super::network_log::NetworkLog;
 use super::plot_samples::PlotSamples;
 use super::Digest;
@@ -17,6 +21,16 @@ use crate::network::tdma::CycleReport;
 /// At most this many links get their own series in the constraint plot; larger models
 /// plot the envelope `max_l |w_l|` only.
 pub const MAX_PLOTTED_LINKS: usize = 24;
+
+/// The columns of the net's invariants on every trace row, after the bodies' (see
+/// [`super::Invariants`]): total momentum [kg·m/s], angular momentum about the centre of
+/// mass [kg·m²/s], kinetic energy [J].
+pub const INVARIANT_COLUMNS: [&str; 7] = ["Px", "Py", "Pz", "Lx", "Ly", "Lz", "KE"];
+
+/// The columns of each traced body's rotation with `output.trace_rotation`, after the
+/// invariants (`<name>_B<id>`): orientation quaternion (body → world) and world angular
+/// velocity [rad/s].
+pub const ROTATION_COLUMNS: [&str; 7] = ["qw", "qx", "qy", "qz", "wx", "wy", "wz"];
 
 /// Records a run's steps. Serializable (without its open file) so that a checkpoint
 /// carries the digest chain, the plot series and, when kept, the trace text so far.
@@ -52,6 +66,13 @@ pub struct Recorder {
     link_peaks: Vec<f64>,
     /// network.csv and the timeline cycles, on a TDMA scene.
     network: Option<NetworkLog>,
+    /// Whether each traced body's orientation and angular velocity go into the trace
+    /// (`output.trace_rotation`).
+    rotation: bool,
+    /// The invariants at the start, the end and the undriven stretches.
+    invariants: InvariantLog,
+    /// The SMC boundary layer's account (SMC runs built with [`Recorder::for_scenario`]).
+    layer: Option<LayerWatch>,
 }
 
 impl Recorder {
@@ -65,12 +86,54 @@ impl Recorder {
         trace_bodies: &[usize],
         plot_bodies: &[usize],
     ) -> std::io::Result<Recorder> {
-        let mut r = Recorder {
+        let mut r =
+            Recorder::unwritten(decimation, link_count, body_ids, trace_bodies, plot_bodies);
+        if let Some(f) = file {
+            r.start_file(f, body_ids)?;
+        }
+        Ok(r)
+    }
+
+    /// The recorder `dsmcosim run` uses for `scenario`, writing `trace.csv` to `file`
+    /// (or only digesting, if `None`): the scenario's decimation, traced and plotted
+    /// bodies and `trace_rotation`; the undriven stretches of its forces, and on SMC its
+    /// boundary layer, followed for summary.json.
+    pub fn for_scenario(
+        file: Option<AtomicFile>,
+        scenario: &Scenario,
+    ) -> std::io::Result<Recorder> {
+        let ids: Vec<u32> = scenario.bodies.iter().map(|b| b.id).collect();
+        let out = &scenario.output;
+        let mut r = Recorder::unwritten(
+            out.decimation,
+            scenario.links.len(),
+            &ids,
+            &out.trace_bodies,
+            &out.plot_bodies,
+        );
+        r.rotation = out.trace_rotation;
+        r.invariants = InvariantLog::new(&undriven_stretches(scenario));
+        r.layer = LayerWatch::new(scenario);
+        if let Some(f) = file {
+            r.start_file(f, &ids)?;
+        }
+        Ok(r)
+    }
+
+    /// A recorder without a trace file yet.
+    fn unwritten(
+        decimation: u64,
+        link_count: usize,
+        body_ids: &[u32],
+        trace_bodies: &[usize],
+        plot_bodies: &[usize],
+    ) -> Recorder {
+        Recorder {
             decimation: decimation.max(1),
             link_count,
             trace_bodies: trace_bodies.to_vec(),
             plot_bodies: plot_bodies.iter().map(|&i| (i, body_ids[i])).collect(),
-            file,
+            file: None,
             line: String::new(),
             text_hash: blake3::Hasher::new(),
             kept: None,
@@ -91,26 +154,44 @@ impl Recorder {
                 Vec::new()
             },
             network: None,
-        };
-        if let Some(f) = &mut r.file {
-            let mut head = String::from("t");
-            for k in 1..=link_count {
-                head.push_str(&format!(",w_L{k}"));
+            rotation: false,
+            invariants: InvariantLog::new(&[]),
+            layer: None,
+        }
+    }
+
+    /// Writes the header to `file`, which the trace goes to from now on. `body_ids[i]`
+    /// is the file id of body index `i`.
+    fn start_file(&mut self, mut file: AtomicFile, body_ids: &[u32]) -> std::io::Result<()> {
+        let mut head = String::from("t");
+        for k in 1..=self.link_count {
+            head.push_str(&format!(",w_L{k}"));
+        }
+        for k in 1..=self.link_count {
+            head.push_str(&format!(",f_L{k}"));
+        }
+        for &i in &self.trace_bodies {
+            let id = body_ids[i];
+            for ax in ["px", "py", "pz", "vx", "vy", "vz"] {
+                head.push_str(&format!(",{ax}_B{id}"));
             }
-            for k in 1..=link_count {
-                head.push_str(&format!(",f_L{k}"));
-            }
-            for &i in trace_bodies {
+        }
+        for name in INVARIANT_COLUMNS {
+            head.push_str(&format!(",{name}"));
+        }
+        if self.rotation {
+            for &i in &self.trace_bodies {
                 let id = body_ids[i];
-                for ax in ["px", "py", "pz", "vx", "vy", "vz"] {
-                    head.push_str(&format!(",{ax}_B{id}"));
+                for name in ROTATION_COLUMNS {
+                    head.push_str(&format!(",{name}_B{id}"));
                 }
             }
-            r.line = format!("{head}\n");
-            f.write_all(r.line.as_bytes())?;
-            r.text_hash.update(r.line.as_bytes());
         }
-        Ok(r)
+        self.line = format!("{head}\n");
+        file.write_all(self.line.as_bytes())?;
+        self.text_hash.update(self.line.as_bytes());
+        self.file = Some(file);
+        Ok(())
     }
 
     /// Records one step: digest always, CSV row and plot samples when the step is kept.
@@ -129,7 +210,18 @@ impl Recorder {
         for (peak, w) in self.link_peaks.iter_mut().zip(s.w) {
             *peak = peak.max(w.abs());
         }
-        if !s.step.is_multiple_of(self.decimation) && !s.last {
+        if let Some(layer) = &mut self.layer {
+            layer.record(s.time, s.max_w);
+        }
+        let row = s.step.is_multiple_of(self.decimation) || s.last;
+        // The invariants cost a pass over the bodies: computed on the rows the trace
+        // keeps and the few steps summary.json needs, not on every step.
+        if !row && !self.invariants.wants(s.step) {
+            return Ok(());
+        }
+        let invariants = s.invariants();
+        self.invariants.record(s.step, s.time, invariants, row);
+        if !row {
             return Ok(());
         }
         self.rows += 1;
@@ -175,6 +267,23 @@ impl Recorder {
                 let _ = write!(self.line, ",{x}");
             }
         }
+        let (m, l) = (&invariants.momentum, &invariants.angular_momentum);
+        for x in m.iter().chain(l.iter()) {
+            let _ = write!(self.line, ",{x}");
+        }
+        let _ = write!(self.line, ",{}", invariants.kinetic_energy);
+        if self.rotation {
+            for &i in &self.trace_bodies {
+                // Point masses have no rotation state: identity and zero.
+                let (q, w) = match (s.q.get(i), s.omega.get(i)) {
+                    (Some(q), Some(w)) => ([q.w, q.i, q.j, q.k], *w),
+                    _ => ([1.0, 0.0, 0.0, 0.0], nalgebra::Vector3::zeros()),
+                };
+                for x in q.iter().chain(w.iter()) {
+                    let _ = write!(self.line, ",{x}");
+                }
+            }
+        }
         self.line.push('\n');
         if let Some(kept) = &mut self.kept {
             kept.push_str(&self.line);
@@ -198,6 +307,17 @@ impl Recorder {
     /// Rows written to the trace.
     pub fn rows(&self) -> u64 {
         self.rows
+    }
+
+    /// summary.json's `invariants` ([`InvariantLog::summary`]); `None` before any step.
+    pub fn invariants_summary(&self) -> Option<serde_json::Value> {
+        self.invariants.summary()
+    }
+
+    /// The SMC boundary layer's account; `None` under Baumgarte or for a recorder not
+    /// built with [`Recorder::for_scenario`].
+    pub fn boundary_layer(&self) -> Option<&LayerWatch> {
+        self.layer.as_ref()
     }
 
     /// Keeps a copy of every trace line from now on (the header included), for
@@ -407,6 +527,10 @@ mod tests {
                 f: &f,
                 p: &p,
                 v: &v,
+                q: &[],
+                omega: &[],
+                max_w: 0.9,
+                bodies: &[],
             })
             .unwrap();
         }

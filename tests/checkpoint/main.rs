@@ -10,11 +10,16 @@ use dsmcosim::run::{resume, run_with, RunOptions};
 use dsmcosim::scenario::parse_str;
 use serde_json::{json, Value};
 
-fn scratch(name: &str) -> PathBuf {
-    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+/// Where [`scratch`] puts `name` (without clearing it).
+fn scratch_path(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("target")
         .join("test-scratch")
-        .join(name);
+        .join(name)
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let d = scratch_path(name);
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).expect("scratch");
     d
@@ -129,6 +134,45 @@ fn a_reused_factor_resumes_bit_for_bit() {
         "output": {"decimation": 50}
     });
     check_resume("pcg", &v, 0.4, 2);
+}
+
+#[test]
+fn invariants_rotations_and_the_boundary_layer_resume_bit_for_bit() {
+    // A rigid net (off-centre anchors) with its rotation traced, a load strong enough to
+    // leave the boundary layer, switched off at 0.6 s: the undriven stretch 0.6–1.2 s
+    // starts between the two checkpoints (0.5 s, 1.0 s) and ends after both, so its
+    // start, the run's start and the layer's counts must all come from the checkpoint.
+    let v = json!({
+        "name": "rigid_invariants", "seed": 1, "duration": 1.2, "dt": 0.001,
+        "integrator": "symplectic_euler",
+        "model": {
+            "bodies": [
+                {"id": 1, "mass": 1.0, "size": 0.2, "position": [0, 0, 0],
+                 "angular_velocity": [0, 0, 2.0]},
+                {"id": 2, "mass": 2.0, "size": 0.3, "position": [2, 0, 0],
+                 "velocity": [0, 0.4, 0]},
+                {"id": 3, "mass": 1.5, "size": 0.25, "position": [1, 1.7, 0.3]}
+            ],
+            "links": [
+                {"a": 1, "b": 2, "anchor_a": [0.1, 0, 0]},
+                {"a": 2, "b": 3, "anchor_b": [0.1, -0.1, 0]},
+                {"a": 3, "b": 1}
+            ]
+        },
+        "forces": [{"body": 1, "amplitude": [0, 0, 300], "omega": 3.0, "until": 0.6}],
+        "output": {"decimation": 7, "trace_rotation": true}
+    });
+    check_resume("invariants", &v, 0.5, 2);
+    let s: Value =
+        serde_json::from_slice(&read(&scratch_path("invariants").join("full/summary.json")))
+            .unwrap();
+    assert!(
+        s["boundary_layer"]["steps_outside"].as_u64() > Some(0),
+        "the scene leaves the layer: {}",
+        s["boundary_layer"]
+    );
+    assert_eq!(s["invariants"]["undriven"][0]["from"], json!(0.6));
+    assert_eq!(s["invariants"]["undriven"][0]["to"], json!(1.2));
 }
 
 #[test]

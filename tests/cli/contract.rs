@@ -4,9 +4,16 @@
 //! - `summary.json`: `scenario`, `seed`, `digest` (64 hex digits), `steps`, `sim_seconds`,
 //!   `wall_seconds`, `max_constraint_violation`, `mean_cost`; on a controlled run also
 //!   `mean_cost_<method>` for every method with an objective column in epochs.csv;
+//! - `summary.json` also: `invariants` with `start` and `end` (`t`, `momentum`,
+//!   `angular_momentum`, `kinetic_energy`) and the drift fields; on SMC runs
+//!   `boundary_layer` (`epsilon`, `steps_outside`, `share_outside`, `worst`,
+//!   `worst_time`);
 //! - `trace.csv`: `t`, then `w_L<k>` and `f_L<k>` for every link `k = 1..links`, then
-//!   `px_B<i>,py_B<i>,pz_B<i>,vx_B<i>,vy_B<i>,vz_B<i>` per traced body; every value a
-//!   finite number, every row as wide as the header, `t` increasing;
+//!   `px_B<i>,py_B<i>,pz_B<i>,vx_B<i>,vy_B<i>,vz_B<i>` per traced body, then
+//!   `Px,Py,Pz,Lx,Ly,Lz,KE`, then (with `output.trace_rotation`)
+//!   `qw_B<i>,qx_B<i>,qy_B<i>,qz_B<i>,wx_B<i>,wy_B<i>,wz_B<i>` per traced body in the
+//!   same order; every value a finite number, every row as wide as the header, `t`
+//!   increasing;
 //! - `epochs.csv` (one row per measurement window): `t_start`, `t_end`, the requested
 //!   and achieved τ of every channel, `bandwidth`, `cost`; on a controlled run the
 //!   objective of every method (NaN where a method measured nothing in that window);
@@ -67,6 +74,46 @@ fn check_summary(s: &Value, out: &mut Vec<String>) {
                 "summary.json: '{key}' is missing or not a finite number ≥ 0 (got {})",
                 s[key]
             )),
+        }
+    }
+    let inv = &s["invariants"];
+    for end in ["start", "end"] {
+        let e = &inv[end];
+        let vector = |k: &str| {
+            e[k].as_array()
+                .is_some_and(|a| a.len() == 3 && a.iter().all(Value::is_f64))
+        };
+        let complete = e["t"].is_f64()
+            && vector("momentum")
+            && vector("angular_momentum")
+            && e["kinetic_energy"].as_f64().is_some_and(|x| x >= 0.0);
+        if !complete {
+            out.push(format!(
+                "summary.json: 'invariants.{end}' lacks t, momentum, angular_momentum or kinetic_energy ≥ 0: {e}"
+            ));
+        }
+    }
+    for key in [
+        "momentum_drift",
+        "angular_momentum_drift",
+        "kinetic_energy_drift",
+    ] {
+        if inv.get(key).is_none() {
+            out.push(format!("summary.json: no 'invariants.{key}'"));
+        }
+    }
+    if s["stabilizer"]["kind"] == "smc" {
+        let b = &s["boundary_layer"];
+        let fine = b["epsilon"].as_f64() == s["stabilizer"]["epsilon"].as_f64()
+            && b["steps_outside"].as_u64().is_some_and(|n| {
+                let share = n as f64 / (s["steps"].as_f64().unwrap_or(0.0) + 1.0);
+                b["share_outside"].as_f64() == Some(share)
+            })
+            && b["worst"].as_f64() == s["max_constraint_violation"].as_f64();
+        if !fine {
+            out.push(format!(
+                "summary.json: 'boundary_layer' does not match the stabilizer, the steps and max |w|: {b}"
+            ));
         }
     }
     let digest = s["digest"].as_str().unwrap_or("");
@@ -135,7 +182,35 @@ fn check_trace(dir: &Path, links: usize, out: &mut Vec<String>) {
             "trace.csv: the header does not start with t, w_L1..w_L{links}, f_L1..f_L{links}"
         ));
     }
-    let bodies = &head[expected.len().min(head.len())..];
+    let rest = &head[expected.len().min(head.len())..];
+    let invariants = ["Px", "Py", "Pz", "Lx", "Ly", "Lz", "KE"];
+    let Some(at) = rest.iter().position(|c| c == "Px") else {
+        out.push("trace.csv: no invariant columns Px..KE".into());
+        return;
+    };
+    let (bodies, rest) = rest.split_at(at);
+    if rest.len() < invariants.len() || rest[..invariants.len()] != invariants {
+        out.push(format!(
+            "trace.csv: the body columns are not followed by {}",
+            invariants.join(",")
+        ));
+        return;
+    }
+    let rotations = &rest[invariants.len()..];
+    if !rotations.is_empty() {
+        let want: Vec<String> = bodies
+            .chunks(6)
+            .flat_map(|g| {
+                let id = g[0].strip_prefix("px_B").unwrap_or("?").to_string();
+                ["qw", "qx", "qy", "qz", "wx", "wy", "wz"].map(|a| format!("{a}_B{id}"))
+            })
+            .collect();
+        if rotations != &want[..] {
+            out.push(format!(
+                "trace.csv: rotation columns {rotations:?} are not qw..wz of each traced body in order"
+            ));
+        }
+    }
     if bodies.is_empty() || bodies.len() % 6 != 0 {
         out.push(format!(
             "trace.csv: {} body columns, not a positive multiple of 6",

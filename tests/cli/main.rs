@@ -5,6 +5,7 @@ use std::process::{Command, Output};
 
 use serde_json::{json, Value};
 
+mod boundary_layer;
 mod check;
 mod contract;
 mod corpus;
@@ -165,10 +166,11 @@ fn run_writes_the_output_contract_and_is_deterministic() {
             "{want} is reported in:\n{breaches}"
         );
     }
-    // Trace columns: t, w_L1..w_L24, f_L1..f_L24, 6 per body.
+    // Trace columns: t, w_L1..w_L24, f_L1..f_L24, 6 per body, the 7 invariants.
     let trace = std::fs::read_to_string(a.join("trace.csv")).unwrap();
     let head: Vec<&str> = trace.lines().next().unwrap().split(',').collect();
-    assert_eq!(head.len(), 1 + 24 + 24 + 16 * 6);
+    assert_eq!(head.len(), 1 + 24 + 24 + 16 * 6 + 7);
+    assert_eq!(&head[145..], &["Px", "Py", "Pz", "Lx", "Ly", "Lz", "KE"]);
     assert_eq!(head[1], "w_L1");
     assert_eq!(head[25], "f_L1");
     assert_eq!(

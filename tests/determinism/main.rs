@@ -126,16 +126,7 @@ impl Case {
 
 /// A recorder that only digests (no trace file), configured as `run` configures it.
 fn recorder(s: &Scenario) -> Recorder {
-    let ids: Vec<u32> = s.bodies.iter().map(|b| b.id).collect();
-    Recorder::new(
-        None,
-        s.output.decimation,
-        s.links.len(),
-        &ids,
-        &s.output.trace_bodies,
-        &s.output.plot_bodies,
-    )
-    .expect("no file, no I/O")
+    Recorder::for_scenario(None, s).expect("no file, no I/O")
 }
 
 /// How a run ended: its digests and, for a diverged run, the error.

@@ -191,7 +191,8 @@ fn check_cli_exit_codes() {
     assert!(text.contains("matches"), "{text}");
     assert!(scratch.join("stored.new/trace.csv").is_file());
 
-    // One changed digit in the last value of row 124 (t = 12.3).
+    // One changed digit in the last value of row 124 (t = 12.3): its KE, the last
+    // column since the invariants follow the bodies.
     let trace = std::fs::read_to_string(stored.join("trace.csv")).expect("trace");
     let mut lines: Vec<String> = trace.lines().map(str::to_string).collect();
     let last = lines[124].pop().expect("a value");
@@ -200,7 +201,7 @@ fn check_cli_exit_codes() {
     let (code, text) = check(&stored, &[]);
     assert_eq!(code, Some(4), "{text}");
     assert!(
-        text.contains("first difference: trace.csv, t = 12.3 (row 124), column vz_B16: stored "),
+        text.contains("first difference: trace.csv, t = 12.3 (row 124), column KE: stored "),
         "{text}"
     );
     let (code, text) = check(&stored, &["--tolerance", "1e-6"]);
