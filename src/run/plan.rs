@@ -433,7 +433,7 @@ mod tests {
     #[test]
     fn the_plan_names_the_transmission_lines() {
         // At 5 ms (age up to 10 ms) the default coupling has no lines; at 50 ms every
-        // border link is one, of impedance 400 N/m · (τ + latency) = 40 N·s/m.
+        // border link is one, of impedance m_r · 2/μ = 0.5 kg · 2 / 0.05 s = 20 N·s/m.
         let p = plan(&shipped("grid16_space_fixed", 1.0)).unwrap();
         assert!(p.lines.is_empty());
         let mut v: Value = serde_json::from_str(
@@ -452,10 +452,10 @@ mod tests {
             names,
             ["L3", "L9", "L10", "L11", "L13", "L14", "L17", "L23"]
         );
-        assert!(p.lines.iter().all(|l| (l.1 - 40.0).abs() < 1e-9));
+        assert!(p.lines.iter().all(|l| (l.1 - 20.0).abs() < 1e-9));
         assert!(p
             .text()
-            .contains("transmission lines (Z = 40 N·s/m): L3 L9"));
+            .contains("transmission lines (Z = 20 N·s/m): L3 L9"));
     }
 
     #[test]
