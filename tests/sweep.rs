@@ -779,7 +779,10 @@ mod hostile {
                     prop_assert!(m.lines().count() == 1 && m.contains(": "), "{}", m);
                 }
             }
-            prop_assert!(start.elapsed() < std::time::Duration::from_secs(5), "took {:?}", start.elapsed());
+            // A guard against a hang, not a speed test: the verdict above is what is
+            // asserted, and users run the suite on busy machines (a 5-s bound failed
+            // there at 7.6 s).
+            prop_assert!(start.elapsed() < std::time::Duration::from_secs(300), "took {:?}", start.elapsed());
         }
     }
 }

@@ -1147,6 +1147,8 @@ proptest! {
             Ok(s) => prop_assert!(in_range && s.controller.unwrap().reflections as u64 == dsm_refl),
             Err(e) => prop_assert!(!in_range && e.to_string().contains("controller.dsm.reflections"), "{e}"),
         }
-        prop_assert!(start.elapsed() < std::time::Duration::from_secs(2), "took {:?}", start.elapsed());
+        // A guard against a hang, not a speed test: the verdicts above are what is
+        // asserted (a busy machine must not fail the suite).
+        prop_assert!(start.elapsed() < std::time::Duration::from_secs(300), "took {:?}", start.elapsed());
     }
 }
