@@ -747,7 +747,10 @@ mod hostile {
     }
 
     proptest! {
-        #![proptest_config(ProptestConfig::with_cases(128))]
+        // A hang is caught by proptest's per-case timeout (each case in its own
+        // process, failed after 300 s); what is asserted is the verdict, not the time
+        // (users run the suite on busy machines, where a 5-s bound failed at 7.6 s).
+        #![proptest_config(ProptestConfig { timeout: 300_000, ..ProptestConfig::with_cases(128) })]
 
         #[test]
         fn every_sweep_file_gets_a_verdict_at_once(
@@ -755,7 +758,6 @@ mod hostile {
             repeat in prop_oneof![Just(json!(1)), Just(json!(0)), Just(json!(3)), Just(json!(1_000_000)), Just(json!("2"))],
             zip in any::<bool>(),
         ) {
-            let start = std::time::Instant::now();
             // Distinct axis names, so that the name rule is not all that is tested.
             let axes: Vec<Value> = axes
                 .into_iter()
@@ -778,11 +780,6 @@ mod hostile {
                     prop_assert_eq!(e.exit_code(), 2, "{}", m);
                     prop_assert!(m.lines().count() == 1 && m.contains(": "), "{}", m);
                 }
-            }
-            // A guard against a hang, not a speed test: the verdict above is what is
-            // asserted, and users run the suite on busy machines (a 5-s bound failed
-            // there at 7.6 s).
-            prop_assert!(start.elapsed() < std::time::Duration::from_secs(300), "took {:?}", start.elapsed());
-        }
+            }        }
     }
 }

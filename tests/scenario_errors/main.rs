@@ -1102,7 +1102,9 @@ fn tdma_with(slot: f64, cycle: f64) -> Value {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(256))]
+    // A hang is caught by proptest's per-case timeout (each case in its own process,
+    // failed after 300 s); what is asserted is each verdict, not the time.
+    #![proptest_config(ProptestConfig { timeout: 300_000, ..ProptestConfig::with_cases(256) })]
 
     /// Times near and below the nanosecond grid, and products of legal values: every case
     /// ends in well under a second with a clean verdict, never a panic, a hang or a huge
@@ -1115,7 +1117,6 @@ proptest! {
         steps_exp in 0u32..8,
         dsm_refl in prop_oneof![0u64..5, 999u64..1002, Just(u64::MAX / 2)],
     ) {
-        let start = std::time::Instant::now();
         // A measurement period of 10^e s: accepted only as a whole number of dt steps.
         let mut v = serde_json::from_str::<Value>(&set("/measurement", json!({"period": 10f64.powi(period_exp)}))).unwrap();
         v["duration"] = json!(1.0);
@@ -1146,9 +1147,5 @@ proptest! {
         match parse_str(&c.to_string(), "c") {
             Ok(s) => prop_assert!(in_range && s.controller.unwrap().reflections as u64 == dsm_refl),
             Err(e) => prop_assert!(!in_range && e.to_string().contains("controller.dsm.reflections"), "{e}"),
-        }
-        // A guard against a hang, not a speed test: the verdicts above are what is
-        // asserted (a busy machine must not fail the suite).
-        prop_assert!(start.elapsed() < std::time::Duration::from_secs(300), "took {:?}", start.elapsed());
-    }
+        }    }
 }
