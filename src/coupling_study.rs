@@ -26,7 +26,7 @@
 //! is chaotic, and over 30 s every stable scheme (latency 0 included) ends metres away
 //! from the monolithic run, so a long-horizon error measures the chaos, not the
 //! coupling. Energy drift is the relative change of the kinetic energy
-//! `Σ ½ m |v|²` over the undriven tail (from the last force's switch-off to the end,
+//! (translation and rotation, `trace::Invariants`) over the undriven tail (from the last force's switch-off to the end,
 //! when that tail is at least 1 s long); momentum drift the change of the total linear
 //! momentum over the same tail [kg·m/s], angular-momentum drift the relative change of
 //! the angular momentum about the centre of mass (both kept to round-off by the
@@ -123,7 +123,6 @@ struct Watch {
     /// Last step time recorded into `positions` [ns].
     horizon: u64,
     positions: Vec<[Vector3<f64>; 2]>,
-    masses: Vec<f64>,
     /// Start of the undriven tail [ns], if the scene has one.
     tail: Option<u64>,
     ke_tail_start: f64,
@@ -152,7 +151,6 @@ impl Watch {
             bodies: [0, n - 1],
             horizon,
             positions: Vec::new(),
-            masses: s.bodies.iter().map(|b| b.mass).collect(),
             tail,
             ke_tail_start: f64::NAN,
             ke_end: f64::NAN,
@@ -160,30 +158,6 @@ impl Watch {
             momenta_end: [Vector3::repeat(f64::NAN); 2],
             max_w: 0.0,
         }
-    }
-
-    fn kinetic(&self, v: &[Vector3<f64>]) -> f64 {
-        v.iter()
-            .zip(&self.masses)
-            .map(|(v, m)| 0.5 * m * v.norm_squared())
-            .sum()
-    }
-
-    /// Total linear momentum and angular momentum about the centre of mass of point
-    /// masses at `p` moving at `v`.
-    fn momenta(&self, p: &[Vector3<f64>], v: &[Vector3<f64>]) -> [Vector3<f64>; 2] {
-        let total: f64 = self.masses.iter().sum();
-        let (mut momentum, mut centre) = (Vector3::zeros(), Vector3::zeros());
-        for ((x, v), m) in p.iter().zip(v).zip(&self.masses) {
-            momentum += v * *m;
-            centre += x * *m;
-        }
-        let (centre, vc) = (centre / total, momentum / total);
-        let mut angular = Vector3::zeros();
-        for ((x, v), m) in p.iter().zip(v).zip(&self.masses) {
-            angular += (x - centre).cross(&(v - vc)) * *m;
-        }
-        [momentum, angular]
     }
 }
 
@@ -194,13 +168,14 @@ impl Observer for Watch {
             self.positions
                 .push([s.p[self.bodies[0]], s.p[self.bodies[1]]]);
         }
-        if Some(t) == self.tail {
-            self.ke_tail_start = self.kinetic(s.v);
-            self.momenta_tail_start = self.momenta(s.p, s.v);
-        }
-        if s.last {
-            self.ke_end = self.kinetic(s.v);
-            self.momenta_end = self.momenta(s.p, s.v);
+        if Some(t) == self.tail || s.last {
+            let inv = s.invariants();
+            let momenta = [inv.momentum, inv.angular_momentum];
+            if s.last {
+                (self.ke_end, self.momenta_end) = (inv.kinetic_energy, momenta);
+            } else {
+                (self.ke_tail_start, self.momenta_tail_start) = (inv.kinetic_energy, momenta);
+            }
         }
         for w in s.w {
             self.max_w = self.max_w.max(w.abs());

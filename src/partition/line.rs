@@ -188,7 +188,7 @@ impl LineSet {
 
 /// The wave an end holds until the first wave arrives [N]: the one that gives the
 /// line the tension `T₀ = (Z/T) w₀` of its initial stretch `w₀` [m] (a spring of the
-/// line's stiffness) at the end's initial extension rate `s₀ = −n·Ṗ` [m/s],
+/// line's stiffness) at the end's initial extension rate `s₀ = −n·(Ṗ − V)` [m/s],
 /// `c₀ = T₀ − Z s₀`. It is the wave the line would carry had its ends always moved so:
 /// a net moving as a rigid body starts with no transient, in every inertial frame (a
 /// zero initial wave braked each end's absolute velocity until the first wave came).

@@ -285,7 +285,7 @@ pub enum Coupling {
     Tlm {
         /// Longest time a force is carried forward by its rate [ns].
         extrapolate: SimTime,
-        /// The lines' stiffness.
+        /// The lines' impedance.
         lines: Lines,
     },
 }
