@@ -175,9 +175,17 @@ fn sample_json(s: &Sample) -> Value {
     })
 }
 
-/// `|d| / |from|`, or `None` (JSON null) where `from` is zero.
-fn relative(d: f64, from: f64) -> Option<f64> {
-    (from != 0.0).then(|| d / from)
+/// A net momentum smaller than this share of its gross scale (`Σ m|v|`, or the same
+/// sum of moments for `L`) is taken for zero: the bodies' momenta cancel, and what is
+/// left is round-off (1e-15 of the gross scale per body), not a value to divide by.
+pub const NIL_SHARE: f64 = 1e-9;
+
+/// `|d| / |from|`, or `None` (JSON null) where `from` is zero, or (for momenta, with
+/// their `gross` scale) nil against it: a monolithic net started at rest had a
+/// momentum of 1e-14 kg·m/s and reported a relative drift of 1.3e13.
+fn relative(d: f64, from: f64, gross: Option<f64>) -> Option<f64> {
+    let nil = gross.map_or(0.0, |g| NIL_SHARE * g);
+    (from.abs() > nil).then(|| d / from)
 }
 
 /// The drift fields from `a` to `b`: each quantity's signed change, and its size
@@ -190,17 +198,25 @@ fn drift_json(a: &Invariants, b: &Invariants) -> Map<String, Value> {
     m.insert("momentum_drift".into(), vector(&dp));
     m.insert(
         "momentum_drift_relative".into(),
-        json!(relative(dp.norm(), a.momentum.norm())),
+        json!(relative(
+            dp.norm(),
+            a.momentum.norm(),
+            Some(a.gross_momentum)
+        )),
     );
     m.insert("angular_momentum_drift".into(), vector(&dl));
     m.insert(
         "angular_momentum_drift_relative".into(),
-        json!(relative(dl.norm(), a.angular_momentum.norm())),
+        json!(relative(
+            dl.norm(),
+            a.angular_momentum.norm(),
+            Some(a.gross_angular_momentum)
+        )),
     );
     m.insert("kinetic_energy_drift".into(), json!(de));
     m.insert(
         "kinetic_energy_drift_relative".into(),
-        json!(relative(de, a.kinetic_energy)),
+        json!(relative(de, a.kinetic_energy, None)),
     );
     m
 }
@@ -301,6 +317,42 @@ mod tests {
             f["until"] = json!(u);
         }
         f
+    }
+
+    fn invariants(p: [f64; 3], gross: f64, ke: f64) -> Invariants {
+        Invariants {
+            momentum: Vector3::from(p),
+            angular_momentum: Vector3::from(p),
+            kinetic_energy: ke,
+            gross_momentum: gross,
+            gross_angular_momentum: gross,
+        }
+    }
+
+    /// Bodies whose momenta cancel (a net at rest as a whole) leave a round-off net
+    /// momentum: its relative drift is null, not 1e13; a real net momentum, however
+    /// small against the gross scale but above round-off, still gets one.
+    #[test]
+    fn a_relative_drift_is_null_from_a_momentum_that_is_round_off() {
+        let d = drift_json(
+            &invariants([1e-14, 0.0, 0.0], 50.0, 10.0),
+            &invariants([0.13, 0.0, 0.0], 50.0, 11.0),
+        );
+        assert_eq!(d["momentum_drift_relative"], Value::Null);
+        assert_eq!(d["angular_momentum_drift_relative"], Value::Null);
+        assert_eq!(d["kinetic_energy_drift_relative"], json!(0.1));
+        let d = drift_json(
+            &invariants([1e-6, 0.0, 0.0], 50.0, 10.0),
+            &invariants([2e-6, 0.0, 0.0], 50.0, 10.0),
+        );
+        assert_eq!(d["momentum_drift_relative"], json!(1.0));
+        // Nothing moving at all: null, as before.
+        let d = drift_json(
+            &invariants([0.0; 3], 0.0, 0.0),
+            &invariants([1.0, 0.0, 0.0], 1.0, 0.5),
+        );
+        assert_eq!(d["momentum_drift_relative"], Value::Null);
+        assert_eq!(d["kinetic_energy_drift_relative"], Value::Null);
     }
 
     /// The thesis load: [0, 12) and [12, 24) leave [24, 30] free, steps 24000..=30000.

@@ -29,6 +29,11 @@ pub struct Invariants {
     pub angular_momentum: Vector3<f64>,
     /// `½ Σ m |v|² + ½ Σ ωᵀ I_world ω` [J].
     pub kinetic_energy: f64,
+    /// `Σ m |v|` [kg·m/s]: the momentum the bodies carry before they cancel, the
+    /// scale below which `|P|` is round-off of cancelling terms.
+    pub gross_momentum: f64,
+    /// `Σ |(p − c) × m v| + Σ |I_world ω|` [kg·m²/s]: the same scale for `L`.
+    pub gross_angular_momentum: f64,
 }
 
 impl Invariants {
@@ -57,21 +62,28 @@ impl Invariants {
             Vector3::zeros()
         };
         let (mut momentum, mut angular, mut twice_ke) = (Vector3::zeros(), Vector3::zeros(), 0.0);
+        let (mut gross, mut gross_angular) = (0.0, 0.0);
         for ((b, p), v) in bodies.iter().zip(p).zip(v) {
             let mv = v * b.mass;
+            let moment = (p - c).cross(&mv);
             momentum += mv;
-            angular += (p - c).cross(&mv);
+            angular += moment;
             twice_ke += mv.dot(v);
+            gross += mv.norm();
+            gross_angular += moment.norm();
         }
         for ((b, q), w) in bodies.iter().zip(q).zip(omega) {
             let spin = spin(&b.inertia, q, w);
             angular += spin;
             twice_ke += w.dot(&spin);
+            gross_angular += spin.norm();
         }
         Invariants {
             momentum,
             angular_momentum: angular,
             kinetic_energy: 0.5 * twice_ke,
+            gross_momentum: gross,
+            gross_angular_momentum: gross_angular,
         }
     }
 }
