@@ -14,8 +14,9 @@
 # results/grid64_tight/ (a 64×64 net at tight accuracy), takes about 2 min of it.
 #
 # --studies also regenerates the speed-accuracy studies (results/tradeoff/, with its
-# subdirectories), the stability map (results/stability/) and the coupling study
-# (results/coupling/) with the commands docs/accuracy.md and docs/guide.md give, and
+# subdirectories), the stability map (results/stability/), the coupling study
+# (results/coupling/, and of the mechanisms in scenarios/mechanisms/ under
+# results/coupling/mechanisms/) with the commands docs/accuracy.md and docs/guide.md give, and
 # the D_s sweeps (results/sweeps/dsm_size_cp{,_hold}/); they take minutes and their
 # wall-time columns change on every run, so the default leaves them alone.
 set -uo pipefail
@@ -86,6 +87,9 @@ if [ $studies -eq 1 ]; then
   study results/tradeoff/grid64_tight_1s tradeoff scenarios/grid64_tight.json --duration 1
   study results/stability stability-map scenarios/grid16_monolithic.json --duration 12
   study results/coupling coupling scenarios/grid16_space_fixed.json
+  for m in scenarios/mechanisms/*.json; do
+    study "results/coupling/mechanisms/$(basename "$m" .json)" coupling "$m"
+  done
   # The D_s sweeps (results/README.md, "Does optimizing pay?"): rerun from scratch; the
   # per-point directories stay out of git (results/sweeps/.gitignore).
   for s in dsm_size_cp dsm_size_cp_hold; do

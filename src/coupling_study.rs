@@ -26,7 +26,8 @@
 //! is chaotic, and over 30 s every stable scheme (latency 0 included) ends metres away
 //! from the monolithic run, so a long-horizon error measures the chaos, not the
 //! coupling. Energy drift is the relative change of the kinetic energy
-//! (translation and rotation, `trace::Invariants`) over the undriven tail (from the last force's switch-off to the end,
+//! (translation and rotation, `trace::Invariants`) over the undriven tail (from the
+//! last force's switch-off to the end, or the whole run when the scene has no force,
 //! when that tail is at least 1 s long); momentum drift the change of the total linear
 //! momentum over the same tail [kg·m/s], angular-momentum drift the relative change of
 //! the angular momentum about the centre of mass (both kept to round-off by the
@@ -139,12 +140,14 @@ impl Watch {
         let n = s.bodies.len();
         let horizon = (ERROR_HORIZON.min(s.duration.as_secs_f64()) * 1e9) as u64;
         let end = s.duration.0;
+        // A scene with no force at all is undriven from its start.
         let last_force = s
             .forces
             .iter()
             .map(|f| f.until.map_or(u64::MAX, |u| u.0))
-            .max();
-        let tail = last_force
+            .max()
+            .unwrap_or(0);
+        let tail = Some(last_force)
             .filter(|&u| u < end && end - u >= 1_000_000_000)
             .map(|u| u.div_ceil(s.dt.0) * s.dt.0);
         Watch {

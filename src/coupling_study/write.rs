@@ -141,43 +141,56 @@ fn fitted_slope(points: &[(f64, f64)]) -> Option<f64> {
     (sxx > 0.0).then(|| sxy / sxx)
 }
 
-pub(super) fn write_plots(out: &Path, name: &str, cells: &[Cell]) -> Result<()> {
-    // One line per scheme and distribution; a distribution whose cells equal the
-    // space distribution's bit for bit (equal τ on every channel routes every message
-    // alike) is named in the space line's label instead of drawn on top of it.
-    let series = |value: &dyn Fn(&Cell) -> f64| -> Vec<Series> {
-        let mut all = Vec::new();
-        for &(scheme, _) in &SCHEMES {
-            let points = |distribution: &str| -> Vec<(f64, f64)> {
-                cells
-                    .iter()
-                    .filter(|c| c.scheme == scheme && c.distribution == distribution)
-                    .filter(|c| c.bounded())
-                    .map(|c| (c.tau * 1e3, value(c)))
-                    .collect()
-            };
-            let space = points(DISTRIBUTIONS[0]);
-            let mut same = Vec::new();
-            let mut other = Vec::new();
-            for &distribution in &DISTRIBUTIONS[1..] {
-                let p = points(distribution);
-                if p == space {
-                    same.push(distribution);
-                } else {
-                    other.push(Series::new(format!("{scheme}, {distribution}"), p));
-                }
-            }
-            let label = if same.is_empty() {
-                format!("{scheme}, space")
+/// Whether two point lists are the same bit for bit (NaN gaps included).
+fn same_bits(a: &[(f64, f64)], b: &[(f64, f64)]) -> bool {
+    a.len() == b.len()
+        && a.iter()
+            .zip(b)
+            .all(|(p, q)| p.0.to_bits() == q.0.to_bits() && p.1.to_bits() == q.1.to_bits())
+}
+
+/// One line per scheme and distribution of `value` over τ [ms]; a distribution whose
+/// cells equal the space distribution's bit for bit (equal τ on every channel routes
+/// every message alike) is named in the space line's label instead of drawn on top of
+/// it.
+fn scheme_series(cells: &[Cell], value: &dyn Fn(&Cell) -> f64) -> Vec<Series> {
+    let mut all = Vec::new();
+    for &(scheme, _) in &SCHEMES {
+        let points = |distribution: &str| -> Vec<(f64, f64)> {
+            // A diverged cell is a gap (NaN breaks the line): a line drawn straight
+            // across it would show a bounded run where there is none.
+            cells
+                .iter()
+                .filter(|c| c.scheme == scheme && c.distribution == distribution)
+                .map(|c| (c.tau * 1e3, if c.bounded() { value(c) } else { f64::NAN }))
+                .collect()
+        };
+        let space = points(DISTRIBUTIONS[0]);
+        let mut same = Vec::new();
+        let mut other = Vec::new();
+        for &distribution in &DISTRIBUTIONS[1..] {
+            let p = points(distribution);
+            if same_bits(&p, &space) {
+                same.push(distribution);
             } else {
-                format!("{scheme}, space = {}", same.join(" = "))
-            };
-            all.push(Series::new(label, space));
-            all.extend(other);
+                other.push(Series::new(format!("{scheme}, {distribution}"), p));
+            }
         }
-        all
-    };
-    // Both plots: delay on a log axis, bounded cells only, one line per scheme.
+        let label = if same.is_empty() {
+            format!("{scheme}, space")
+        } else {
+            format!("{scheme}, space = {}", same.join(" = "))
+        };
+        all.push(Series::new(label, space));
+        all.extend(other);
+    }
+    all
+}
+
+pub(super) fn write_plots(out: &Path, name: &str, cells: &[Cell]) -> Result<()> {
+    let series = |value: &dyn Fn(&Cell) -> f64| scheme_series(cells, value);
+    // Every plot: delay on a log axis, bounded cells only (a diverged one is a gap in
+    // its line), one line per scheme.
     let plot = |file: &str, what: &str, y_label: &str, y_scale: Scale, series: &[Series]| {
         let title = format!("{name} — {what} vs delay (bounded runs only)");
         write_line_plot(
@@ -219,7 +232,46 @@ pub(super) fn write_plots(out: &Path, name: &str, cells: &[Cell]) -> Result<()> 
 
 #[cfg(test)]
 mod tests {
-    use super::fitted_slope;
+    use super::*;
+
+    fn cell(scheme: &'static str, distribution: &'static str, tau: f64, ok: bool) -> Cell {
+        Cell {
+            scheme,
+            distribution,
+            tau,
+            error: (!ok).then(|| "diverged".to_string()),
+            max_w: 0.1,
+            err_mono: tau,
+            err_dt: tau,
+            energy_drift: 0.0,
+            momentum_drift: 0.0,
+            angular_drift: 0.0,
+            wall_per_step: 1e-6,
+        }
+    }
+
+    /// A diverged cell between bounded ones is a gap in its line, not a straight
+    /// segment across it; a distribution equal to space's (gaps included) is merged.
+    #[test]
+    fn a_diverged_cell_breaks_its_line() {
+        let mut cells = Vec::new();
+        for d in DISTRIBUTIONS {
+            for (tau, ok) in [(0.003, true), (0.010, false), (0.050, true)] {
+                cells.push(cell("predict", d, tau, ok));
+            }
+        }
+        let series = scheme_series(&cells, &|c| c.err_mono);
+        let predict: Vec<&Series> = series
+            .iter()
+            .filter(|s| s.label.starts_with("predict"))
+            .collect();
+        assert_eq!(predict.len(), 1, "time equals space, gap included");
+        assert_eq!(predict[0].label, "predict, space = time");
+        let y: Vec<f64> = predict[0].points.iter().map(|p| p.1).collect();
+        assert_eq!(y[0], 0.003);
+        assert!(y[1].is_nan());
+        assert_eq!(y[2], 0.05);
+    }
 
     #[test]
     fn the_fitted_order_of_a_power_law_is_its_exponent() {

@@ -452,3 +452,48 @@ fn transmission_lines_never_give_the_bodies_more_than_they_took() {
         }
     }
 }
+
+/// The shipped mechanisms (`scenarios/mechanisms/`) validate, and the study measures a
+/// scene with no force at all over its whole run: the free spinning ring's tail starts
+/// at 0, so every bounded cell has its drifts (a study that waited for a last force to
+/// switch off reported none).
+#[test]
+fn the_coupling_study_measures_a_force_free_mechanism_from_its_start() {
+    let dir = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenarios/mechanisms");
+    let mut names = Vec::new();
+    for entry in std::fs::read_dir(&dir).expect("scenarios/mechanisms") {
+        let p = entry.expect("entry").path();
+        let text = std::fs::read_to_string(&p).expect("read");
+        let s = parse_str(&text, &p.display().to_string())
+            .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+        assert!(s.partition.is_some(), "{}: partitioned", p.display());
+        names.push(s.name);
+    }
+    names.sort();
+    assert_eq!(
+        names,
+        ["chain10", "grid16_mass_ratio", "pendulum2", "ring12"]
+    );
+    let out = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("target/test-scratch/coupling_ring");
+    let _ = std::fs::remove_dir_all(&out);
+    let cells =
+        dsmcosim::coupling_study::study(&dir.join("ring12.json"), &out, Some(1.5), &mut |_, _| {})
+            .expect("study");
+    let bounded: Vec<_> = cells.iter().filter(|c| c.bounded()).collect();
+    assert!(
+        bounded.len() > cells.len() / 2,
+        "most of the ring's cells hold"
+    );
+    for c in bounded {
+        assert!(
+            c.energy_drift.is_finite()
+                && c.momentum_drift.is_finite()
+                && c.angular_drift.is_finite(),
+            "{} {} {}: drifts measured over the whole run",
+            c.scheme,
+            c.distribution,
+            c.tau
+        );
+    }
+}
