@@ -73,6 +73,53 @@ pub fn read_summary(dir: &Path) -> Result<RunSummary> {
     })
 }
 
+/// `path` made absolute with its existing part resolved (symlinks, `..`): the
+/// canonical form of its longest existing ancestor, then the rest as given.
+fn resolved(path: &Path) -> PathBuf {
+    let abs = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+    let mut head = abs.as_path();
+    let mut tail = Vec::new();
+    loop {
+        if let Ok(c) = head.canonicalize() {
+            return tail.iter().rev().fold(c, |p, t| p.join(t));
+        }
+        match (head.parent(), head.file_name()) {
+            (Some(parent), Some(name)) => {
+                tail.push(name.to_os_string());
+                head = parent;
+            }
+            _ => return abs,
+        }
+    }
+}
+
+/// Refuses a rerun directory `new` that is the stored run `stored`, lies inside it or
+/// holds it (however the two are spelled: `--work D --against D`, symlinks, `..`): the
+/// rerun would replace the stored files it is to be compared with (exit 2, naming
+/// `--work`).
+pub fn apart(stored: &Path, new: &Path) -> Result<()> {
+    let (s, n) = (resolved(stored), resolved(new));
+    if n.starts_with(&s) || s.starts_with(&n) {
+        let how = if n == s {
+            "is"
+        } else if n.starts_with(&s) {
+            "lies inside"
+        } else {
+            "holds"
+        };
+        return Err(Error::invalid(
+            "--work",
+            format!(
+                "the rerun directory {} {how} the stored run {}: the rerun would replace \
+                 what it is compared with (choose a --work outside the stored runs)",
+                new.display(),
+                stored.display()
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// The directory beside `dir` that a check writes its new run to: `DIR.new`.
 pub fn sibling(dir: &Path) -> Result<PathBuf> {
     let dir = if dir.file_name().is_some() {
@@ -89,33 +136,15 @@ pub fn sibling(dir: &Path) -> Result<PathBuf> {
     Ok(dir.with_file_name(name))
 }
 
-/// Runs `scenario` into `out` (after removing the outputs a previous run left there:
-/// `summary.json`, `*.csv`, `*.svg`) and returns its summary. A run that diverges or
-/// fails numerically is a result like any other; only bad input and I/O failures are
-/// errors.
+/// Runs `scenario` into `out` (claimed as every run claims its directory: the previous
+/// rerun's outputs there are replaced, [`crate::output::run_dir`]) and returns its
+/// summary. A run that diverges or fails numerically is a result like any other; only
+/// bad input and I/O failures are errors.
 pub fn rerun(scenario: &Scenario, out: &Path) -> Result<RunSummary> {
-    clear_outputs(out)?;
     match crate::run::run(scenario, out) {
         Ok(_) | Err(Error::Diverged(_)) | Err(Error::Numerical { .. }) => read_summary(out),
         Err(e) => Err(e),
     }
-}
-
-fn clear_outputs(dir: &Path) -> Result<()> {
-    let entries = match std::fs::read_dir(dir) {
-        Ok(entries) => entries,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
-        Err(e) => return Err(Error::io(dir, e)),
-    };
-    for entry in entries {
-        let path = entry.map_err(|e| Error::io(dir, e))?.path();
-        let name = path.file_name().unwrap_or_default().to_string_lossy();
-        let output = name == "summary.json" || name.ends_with(".csv") || name.ends_with(".svg");
-        if output && path.is_file() {
-            std::fs::remove_file(&path).map_err(|e| Error::io(&path, e))?;
-        }
-    }
-    Ok(())
 }
 
 /// How a check ended.
@@ -254,14 +283,20 @@ impl Report {
 }
 
 /// The comparison rule for `--tolerance`: `None` for an exact comparison, else a
-/// relative tolerance, which must be finite and ≥ 0 (bad input otherwise).
+/// relative tolerance, which must be in [0, 1) (bad input otherwise).
 pub fn parse_tolerance(tolerance: Option<f64>) -> Result<Tolerance> {
     match tolerance {
         None => Ok(Tolerance::Exact),
-        Some(x) if x.is_finite() && x >= 0.0 => Ok(Tolerance::Relative(x)),
+        Some(x) if (0.0..1.0).contains(&x) => Ok(Tolerance::Relative(x)),
+        // A relative difference is 1 between any value and 0, and up to 2 between values
+        // of opposite signs: from 1 on, nearly anything would pass.
         Some(x) => Err(Error::invalid(
             "--tolerance",
-            format!("must be a finite number ≥ 0 (got {x})"),
+            format!(
+                "must be a relative difference ≥ 0 and below 1 (got {}; at 1 any value \
+                 agrees with 0)",
+                crate::error::num(x)
+            ),
         )),
     }
 }
@@ -295,6 +330,7 @@ pub fn check_into(
     new_dir: &Path,
     tolerance: Tolerance,
 ) -> Result<Report> {
+    apart(against, new_dir)?;
     let stored = read_stored(against)?;
     let new = rerun(scenario, new_dir)?;
     Report::compare(stored, new, tolerance)

@@ -95,9 +95,36 @@ pub fn write(
     Ok(path)
 }
 
+/// The bytes of a checkpoint file: the first 20 (magic and version) alone unless they
+/// are a checkpoint's, else the whole file up to the memory bound.
+fn read_bytes(path: &Path) -> Result<Vec<u8>> {
+    use std::io::Read;
+    let mut file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut bytes = Vec::new();
+    let head = (MAGIC.len() + 4) as u64;
+    (&mut file)
+        .take(head)
+        .read_to_end(&mut bytes)
+        .map_err(|e| Error::io(path, e))?;
+    if bytes.len() as u64 == head
+        && &bytes[..MAGIC.len()] == MAGIC
+        && bytes[MAGIC.len()..] == VERSION.to_le_bytes()
+    {
+        let cap = crate::run::budget::DEFAULT_MAX_MEMORY_BYTES;
+        file.take(cap)
+            .read_to_end(&mut bytes)
+            .map_err(|e| Error::io(path, e))?;
+    }
+    Ok(bytes)
+}
+
 /// Reads a checkpoint; a truncated, corrupted or foreign file is a clear error.
+///
+/// The magic bytes and the version are read and checked first, so that a file that is no
+/// checkpoint (`/dev/zero`, any stream) is refused after 20 bytes instead of read whole;
+/// the rest is read up to [`crate::run::budget::DEFAULT_MAX_MEMORY_BYTES`].
 pub fn read(path: &Path) -> Result<Checkpoint> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = read_bytes(path)?;
     let label = path.display().to_string();
     if bytes.len() < MAGIC.len() + 4 || &bytes[..MAGIC.len()] != MAGIC {
         return Err(Error::invalid(

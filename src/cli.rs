@@ -59,8 +59,11 @@ pub enum Command {
     ///
     /// One run per output directory: a second run into a directory in use exits 1
     /// naming the holder; a directory holding another scenario's run is refused (exit 2)
-    /// unless --force; the outputs and temporary files of earlier runs there are removed
-    /// first (checkpoints/ and other files are kept).
+    /// unless --force; the previous run's outputs are replaced, and those this run does
+    /// not write again removed once its summary.json is written; a directory holding no
+    /// run where a file has a run's name is refused, and nothing is written through a
+    /// symlink or onto a non-regular file (docs/reference.md, "What dsmcosim deletes or
+    /// replaces").
     Run {
         /// Scenario file (JSON).
         scenario: PathBuf,
@@ -280,9 +283,17 @@ pub enum Command {
 /// Entry point of the binary.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
-    match execute(cli.command) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
+    let result = execute(cli.command);
+    // Output lost on stdout fails a command that otherwise succeeded (exit 1, as any
+    // I/O failure); a failed command keeps its own exit code.
+    let stdout = crate::console::take_failure();
+    match (result, stdout) {
+        (Ok(()), None) => ExitCode::SUCCESS,
+        (Ok(()), Some(e)) => {
+            eprintln!("error: writing to standard output: {e}");
+            ExitCode::from(1)
+        }
+        (Err(e), _) => {
             eprintln!("error: {e}");
             ExitCode::from(e.exit_code())
         }
@@ -327,10 +338,32 @@ fn run_options(
         None => None,
         Some(secs) => match crate::kernel::SimTime::from_secs_f64(secs) {
             Some(t) if t.0 > 0 => Some(t),
+            Some(_) if secs > 0.0 => {
+                return Err(crate::Error::invalid(
+                    "--checkpoint-every",
+                    format!(
+                        "must be at least 1 ns, a whole number of nanoseconds (got {} s)",
+                        crate::error::num(secs)
+                    ),
+                ))
+            }
+            None if secs.is_finite() && secs > 0.0 => {
+                return Err(crate::Error::invalid(
+                    "--checkpoint-every",
+                    format!(
+                        "is beyond the range of simulated time (got {} s, limit about \
+                         1.8e10 s)",
+                        crate::error::num(secs)
+                    ),
+                ))
+            }
             _ => {
                 return Err(crate::Error::invalid(
                     "--checkpoint-every",
-                    format!("must be a positive number of seconds (got {secs})"),
+                    format!(
+                        "must be a positive number of seconds (got {})",
+                        crate::error::num(secs)
+                    ),
                 ))
             }
         },
@@ -362,7 +395,7 @@ fn report(name: &str, outcome: &crate::run::Outcome, out: &std::path::Path) {
 /// Whether `path` holds a sweep file (a JSON object with `axes` and `base`) rather than
 /// a scenario; anything unreadable is left to the scenario loader to report.
 fn is_sweep(path: &std::path::Path) -> bool {
-    std::fs::read_to_string(path)
+    crate::input::read_text(path)
         .ok()
         .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
         .is_some_and(|v| v.get("axes").is_some() && v.get("base").is_some())
@@ -404,6 +437,9 @@ pub fn execute(command: Command) -> crate::Result<()> {
                     c.warnings.len()
                 );
                 return Ok(());
+            }
+            if let Some(path) = &json {
+                crate::output::check_report_target(path, "--json", &[&scenario])?;
             }
             let (s, _) = scenario::load_with(&scenario, &sets)?;
             let options = run_options(None, false, limits)?;
@@ -459,6 +495,25 @@ pub fn execute(command: Command) -> crate::Result<()> {
             json,
             sets,
         } => {
+            // Before anything runs: a report never replaces an input, a stored run's
+            // file or anything but a regular file.
+            let inputs: Vec<&std::path::Path> = scenarios.iter().map(PathBuf::as_path).collect();
+            for (path, flag) in [(&junit, "--junit"), (&json, "--json")] {
+                if let Some(path) = path {
+                    crate::output::check_report_target(path, flag, &inputs)?;
+                }
+            }
+            if let (Some(a), Some(b)) = (&junit, &json) {
+                if a == b {
+                    return Err(crate::Error::invalid(
+                        "--json",
+                        format!(
+                            "{} is the --junit file too; give each report its own",
+                            b.display()
+                        ),
+                    ));
+                }
+            }
             let options = crate::check::batch::Options {
                 against,
                 tolerance,

@@ -9,7 +9,6 @@
 //! The trace files are read whole, so their size bounds the memory used; at most
 //! [`MAX_CURVES`] runs × bodies are compared, the curves one plot can tell apart.
 
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
@@ -140,18 +139,14 @@ pub fn command(reference: &Path, runs: &[PathBuf], bodies: &[u32], out: &Path) -
         }
     }
     create_dir_all(out)?;
-    let mut csv = String::from("t");
-    for (name, _) in &columns {
-        let _ = write!(csv, ",{name}");
-    }
-    csv.push('\n');
-    for (i, row) in refer.rows.iter().enumerate() {
-        let _ = write!(csv, "{}", row[0]);
-        for (_, d) in &columns {
-            let _ = write!(csv, ",{}", d[i]);
-        }
-        csv.push('\n');
-    }
+    // Through the CSV writer: a run path with a comma or a quote is one quoted field.
+    let header = std::iter::once("t".to_string()).chain(columns.iter().map(|(n, _)| n.clone()));
+    let rows = refer.rows.iter().enumerate().map(|(i, row)| {
+        std::iter::once(format!("{}", row[0]))
+            .chain(columns.iter().map(move |(_, d)| format!("{}", d[i])))
+            .collect::<Vec<String>>()
+    });
+    let csv = crate::output::csv_text(std::iter::once(header.collect::<Vec<String>>()).chain(rows));
     write_atomic(&out.join("distance.csv"), csv.as_bytes())?;
     let series: Vec<Series> = columns
         .iter()

@@ -135,5 +135,18 @@ impl Error {
     }
 }
 
+/// Formats a number for a message: plain for ordinary magnitudes (`-1`, `0.05`),
+/// exponent form for tiny or huge ones (`1e-300`, `1e308`, never 309 digits), `NaN` and
+/// `inf` as Rust spells them. Every value a user gave that an error repeats goes
+/// through it.
+pub fn num(x: f64) -> String {
+    let a = x.abs();
+    if x == 0.0 || !x.is_finite() || (1e-4..1e16).contains(&a) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
 /// Result with the crate's [`Error`].
 pub type Result<T> = std::result::Result<T, Error>;

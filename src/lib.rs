@@ -61,6 +61,7 @@ pub mod cosim;
 pub mod coupling_study;
 pub mod distance;
 pub mod error;
+pub mod input;
 pub mod kernel;
 pub mod multibody;
 pub mod network;

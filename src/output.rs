@@ -9,6 +9,14 @@
 //!
 //! I/O errors name the target path (not the temporary one), since that is the file the
 //! user asked for.
+//!
+//! A rename replaces whatever has the target's name, so the target is checked first
+//! ([`check_replaceable`]): absent, or a regular file. A symlink (which the rename would
+//! replace, not write through), a FIFO (whose reader would wait forever), a device
+//! node or a directory is refused naming the path, when the file is opened and again
+//! just before the rename. Which regular files a command may replace is the callers'
+//! rule ([`run_dir`] for a run's directory, [`check_report_target`] for a report
+//! file); docs/reference.md ("What dsmcosim deletes or replaces") states it for users.
 
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
@@ -19,6 +27,92 @@ use tempfile::NamedTempFile;
 use crate::error::{Error, Result};
 
 pub mod run_dir;
+
+/// Refuses (exit 2, naming the path) a `path` that exists and is not a regular file: a
+/// symlink (not followed), a FIFO, a socket, a device node, a directory. `what` says
+/// what the path was to be (`output`, `lock file`). An absent path is fine.
+pub fn check_replaceable(path: &Path, what: &str) -> Result<()> {
+    let meta = match std::fs::symlink_metadata(path) {
+        Ok(m) => m,
+        Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(()),
+        Err(e) => return Err(Error::io(path, e)),
+    };
+    let t = meta.file_type();
+    if t.is_file() {
+        return Ok(());
+    }
+    let kind = if t.is_symlink() {
+        "a symlink"
+    } else if t.is_dir() {
+        "a directory"
+    } else {
+        special_kind(&t)
+    };
+    Err(Error::invalid(
+        path.display().to_string(),
+        format!(
+            "is {kind}, not a regular file: dsmcosim writes its {what} only as a new or \
+             regular file (never through a symlink or onto a FIFO or device)"
+        ),
+    ))
+}
+
+/// The kind of a file that is neither regular, a directory nor a symlink.
+fn special_kind(t: &std::fs::FileType) -> &'static str {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_fifo() {
+            return "a FIFO";
+        }
+        if t.is_char_device() || t.is_block_device() {
+            return "a device node";
+        }
+        if t.is_socket() {
+            return "a socket";
+        }
+    }
+    let _ = t;
+    "a special file"
+}
+
+/// Checks a report file a command writes on request (`validate --json`, `check --json`,
+/// `check --junit`) before anything runs: `flag` names the option. Refused, exit 2:
+/// a path that is not a regular file ([`check_replaceable`]); one of the command's
+/// `inputs` (the same file, however named); a file a run wrote in a directory that
+/// holds a run ([`run_dir::is_run_file`]: a stored `summary.json`, `trace.csv`, …).
+pub fn check_report_target(path: &Path, flag: &str, inputs: &[&Path]) -> Result<()> {
+    let named = |m: String| Error::invalid(flag, format!("{}: {m}", path.display()));
+    check_replaceable(path, "report").map_err(|e| match e {
+        Error::Invalid { message, .. } => named(message),
+        e => e,
+    })?;
+    if !path.exists() {
+        return Ok(());
+    }
+    let same = |a: &Path, b: &Path| match (std::fs::canonicalize(a), std::fs::canonicalize(b)) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    };
+    if let Some(input) = inputs.iter().find(|i| same(path, i)) {
+        return Err(named(format!(
+            "is an input of this command ({}); write the report elsewhere",
+            input.display()
+        )));
+    }
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let name = path.file_name().unwrap_or_default().to_string_lossy();
+    if run_dir::holds_run(dir) && run_dir::is_run_file(&name) {
+        return Err(named(format!(
+            "is the {name} of the run stored in {}; write the report elsewhere",
+            dir.display()
+        )));
+    }
+    Ok(())
+}
 
 /// Writes `bytes` to `path` atomically: the file either keeps its old content (or stays
 /// absent) or has exactly `bytes`, never a mix.
@@ -89,6 +183,7 @@ impl AtomicFile {
             Some(p) if !p.as_os_str().is_empty() => p,
             _ => Path::new("."),
         };
+        check_replaceable(path, "output")?;
         let mut builder = tempfile::Builder::new();
         builder.prefix(&prefix).rand_bytes(8);
         // The mode a plain `File::create` gives (0o666 less the umask), not tempfile's
@@ -123,6 +218,8 @@ impl AtomicFile {
             .into_inner()
             .map_err(|e| Error::io(&path, e.into_error()))?;
         file.as_file().sync_all().map_err(|e| Error::io(&path, e))?;
+        // Again at the rename: the target may have changed while the file was written.
+        check_replaceable(&path, "output")?;
         // On failure the error carries the temporary file, which drops (removed).
         file.persist(&path).map_err(|e| Error::io(&path, e.error))?;
         sync_parent_dir(&path);

@@ -89,7 +89,7 @@ pub fn preflight(scenario: &Scenario, options: &RunOptions) -> Result<Option<Con
 /// Runs `scenario` with `options` and writes its outputs into `out`.
 pub fn run_with(scenario: &Scenario, out: &Path, options: RunOptions) -> Result<Outcome> {
     let controller = preflight(scenario, &options)?;
-    let _dir = claim(out, &scenario.name, options.force)?;
+    let dir = claim(out, &scenario.name, options.force)?;
     let trace_path = out.join("trace.csv");
     let file = if options.skip_trace_files {
         None
@@ -119,7 +119,16 @@ pub fn run_with(scenario: &Scenario, out: &Path, options: RunOptions) -> Result<
     if options.checkpoint_every.is_some() {
         recorder.keep_lines();
     }
-    finish(out, world, recorder, controller, options)
+    let result = finish(out, world, recorder, controller, options);
+    stale_removed(&dir, result)
+}
+
+/// `result`, after removing the previous run's outputs this run did not replace (only
+/// once this run's summary.json is written, [`crate::output::run_dir::RunDir::remove_stale`]).
+fn stale_removed(dir: &crate::output::run_dir::RunDir, result: Result<Outcome>) -> Result<Outcome> {
+    let removed = dir.remove_stale();
+    let outcome = result?;
+    removed.map(|()| outcome)
 }
 
 /// Finishes the run saved in the checkpoint at `path`, writing every output into `out`
@@ -127,7 +136,7 @@ pub fn run_with(scenario: &Scenario, out: &Path, options: RunOptions) -> Result<
 pub fn resume(path: &Path, out: &Path, options: RunOptions) -> Result<Outcome> {
     let cp = crate::checkpoint::read(path)?;
     budget::Estimate::of(cp.world.scenario(), options.checkpoint_every).check(&options.limits)?;
-    let _dir = claim(out, &cp.world.scenario().name, options.force)?;
+    let dir = claim(out, &cp.world.scenario().name, options.force)?;
     let trace_path = out.join("trace.csv");
     let mut recorder = cp.recorder;
     recorder
@@ -139,7 +148,8 @@ pub fn resume(path: &Path, out: &Path, options: RunOptions) -> Result<Outcome> {
             .reattach_network(AtomicFile::create(&path)?)
             .map_err(|e| Error::io(&path, e))?;
     }
-    finish(out, cp.world, recorder, cp.controller, options)
+    let result = finish(out, cp.world, recorder, cp.controller, options);
+    stale_removed(&dir, result)
 }
 
 /// Runs the world from where it is to its end, then writes every output.
@@ -203,13 +213,16 @@ fn drive(
     let s = world.scenario();
     let (steps, dt, end) = (s.steps, s.dt, s.duration);
     let mut progress = crate::progress::Progress::new(steps);
-    let slice = SimTime(dt.0 * 1024);
+    // Saturating: a dt near the end of simulated time (about 1.8e10 s) times 1024 wrapped
+    // to a slice that never reached the end.
+    let slice = SimTime(dt.0.saturating_mul(1024));
     let mut t = match &controller {
         Some(c) => c.next_window(),
         None => world.now(),
     };
     let every = options.checkpoint_every.filter(|e| e.0 > 0);
-    let mut next_cp = every.map(|e| SimTime((t.0 / e.0 + 1) * e.0));
+    let next_multiple = |t: SimTime, e: SimTime| SimTime((t.0 / e.0 + 1).saturating_mul(e.0));
+    let mut next_cp = every.map(|e| next_multiple(t, e));
     while t < end {
         let target = next_cp.unwrap_or(end).min(end);
         match controller.as_deref_mut() {
@@ -219,7 +232,7 @@ fn drive(
             }
             None => {
                 while t < target {
-                    t = SimTime(t.0 + slice.0).min(target);
+                    t = SimTime(t.0.saturating_add(slice.0)).min(target);
                     world.advance_to(t, recorder)?;
                     progress.tick(world.steps_done());
                 }
@@ -229,7 +242,7 @@ fn drive(
             if t < end {
                 crate::checkpoint::write(out, t, world, recorder, controller.as_deref())?;
             }
-            next_cp = Some(SimTime((t.0 / e.0 + 1) * e.0).max(SimTime(cp.0 + e.0)));
+            next_cp = Some(next_multiple(t, e).max(SimTime(cp.0.saturating_add(e.0))));
         }
     }
     world.run_to_end(recorder)?;
@@ -381,7 +394,13 @@ fn write_summary(out: &Path, run: &Ran) -> Result<()> {
         "scenario": scenario.name,
         "provenance": provenance(scenario),
         "seed": scenario.seed,
-        "status": if error.is_some() { "diverged" } else { "ok" },
+        // `diverged` for what the simulation did (a divergence, a numerical failure);
+        // `failed` for what stopped it from outside (an unwritable checkpoint).
+        "status": match failure {
+            None => "ok",
+            Some(Error::Diverged(_) | Error::Numerical { .. }) => "diverged",
+            Some(_) => "failed",
+        },
         "error": error,
         "divergence": failure.map(divergence),
         "digest": outcome.digest,

@@ -144,7 +144,7 @@ pub struct Options {
 
 /// Reads a scenario file: the raw JSON (to edit) and the validated base.
 pub fn load_json(path: &Path) -> Result<(Value, Scenario)> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = crate::input::read_text(path)?;
     let label = path.display().to_string();
     let scenario = parse_str(&text, &label)?;
     let json: Value =
@@ -158,7 +158,10 @@ pub fn with_horizon(json: &Value, duration: f64, flag: &str) -> Result<(Value, S
     if !(duration.is_finite() && duration > 0.0) {
         return Err(Error::invalid(
             flag,
-            format!("must be a positive number of seconds (got {duration})"),
+            format!(
+                "must be a positive number of seconds (got {})",
+                crate::error::num(duration)
+            ),
         ));
     }
     let mut v = json.clone();
@@ -304,11 +307,12 @@ pub fn study(json: &Value, scenario: &Scenario, options: Options) -> Result<Stud
     let half_scenario = knobs::reference(&base_json, SimTime(reference_dt.as_nanos() / 2))?;
     let total: u64 = variants
         .iter()
-        .filter_map(|(s, _)| s.as_ref().map(|s| s.steps + 1))
-        .sum::<u64>()
-        + reference_scenario.steps
-        + half_scenario.steps
-        + 2;
+        .filter_map(|(s, _)| s.as_ref().map(|s| s.steps.saturating_add(1)))
+        .fold(0u64, u64::saturating_add)
+        .saturating_add(reference_scenario.steps)
+        .saturating_add(half_scenario.steps)
+        .saturating_add(2);
+    crate::run::budget::check_study_steps(total, "--duration")?;
     let mut progress = measure::Counter::new(total);
     let reference = measure::measure(&reference_scenario, compare_every, &mut progress);
     let half = measure::measure(&half_scenario, compare_every, &mut progress);

@@ -269,6 +269,10 @@ pub fn run(scenarios: &[PathBuf], options: &Options) -> Result<Batch> {
                 }
             },
         };
+        if let Err(e) = super::apart(&stored, &new) {
+            planned.push(Err(failed(name, stored, None, e)));
+            continue;
+        }
         if let Some(first) = rerun_dirs.get(&new) {
             let e = Error::invalid(
                 "name",

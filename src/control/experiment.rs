@@ -248,7 +248,7 @@ impl Controller {
         let (dsm, nm, exp) = (&mut self.dsm, &mut self.nm, &mut self.experiment);
         let mut t = self.next;
         while t < scenario.duration && t < stop {
-            let t_end = SimTime(t.0 + period.0).min(scenario.duration);
+            let t_end = SimTime(t.0.saturating_add(period.0)).min(scenario.duration);
             world.advance_to(t, obs)?;
             let live_world: &P = world;
             let eval = |x: &[f64]| evaluate(live_world, &delays, x, t, t_end);

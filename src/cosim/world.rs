@@ -442,7 +442,7 @@ impl CoSim {
             let lag = link.decision_lag();
             if lag == SimTime::ZERO {
                 link.decide(at, sched.list)?;
-            } else if at.0 + lag.0 < self.scenario.duration.0 {
+            } else if at.0.saturating_add(lag.0) < self.scenario.duration.0 {
                 let requested = requested.to_vec();
                 self.schedule(
                     SimTime(at.0 + lag.0),
@@ -720,7 +720,9 @@ impl CoSim {
     /// A channel samples its routes at `t`.
     fn sample(&mut self, t: SimTime, c: usize) {
         let latency = self.channels[c].latency();
-        let arrive = SimTime(t.0 + latency.0);
+        // Saturating, here and below: times near the end of simulated time (u64 ns)
+        // must not wrap to the start.
+        let arrive = SimTime(t.0.saturating_add(latency.0));
         for r in 0..self.channels[c].routes.len() {
             if arrive > self.scenario.duration {
                 break;
@@ -729,7 +731,7 @@ impl CoSim {
                 self.send(arrive, msg);
             }
         }
-        let next = SimTime(t.0 + self.channels[c].tau.0);
+        let next = SimTime(t.0.saturating_add(self.channels[c].tau.0));
         if next < self.scenario.duration {
             self.schedule(next, EventClass::Sample, Event::Sample { channel: c });
         }
@@ -759,8 +761,8 @@ impl CoSim {
                 .fold(0.0, |a, b| a + b),
         });
         if t < self.scenario.duration {
-            let next =
-                SimTime(t.0 + self.scenario.measurement_period.0).min(self.scenario.duration);
+            let next = SimTime(t.0.saturating_add(self.scenario.measurement_period.0))
+                .min(self.scenario.duration);
             self.schedule(next, EventClass::Measurement, Event::WindowEnd);
         }
     }
@@ -820,7 +822,7 @@ impl CoSim {
                 finish_node(&mut self.nodes[n], t).map_err(|e| self.eval_error(t, n, e))?;
             }
         }
-        self.next_step = Some(SimTime(t.0 + self.scenario.dt.0));
+        self.next_step = Some(SimTime(t.0.saturating_add(self.scenario.dt.0)));
         Ok(())
     }
 
@@ -864,7 +866,9 @@ impl CoSim {
             match link_fault(w, f, bound) {
                 None => max = max.max(w.abs()),
                 Some(what) => {
-                    self.max_violation = self.max_violation.max(max);
+                    // The failing link's own |w| counts (when finite): it is the step
+                    // the divergence error reports.
+                    self.max_violation = self.max_violation.max(max).max(finite_abs(w));
                     return Err(self.link_diverged(t, l, what));
                 }
             }
@@ -906,7 +910,7 @@ impl CoSim {
                             }
                             match link_fault(*w, *f, bound) {
                                 None => max = max.max(w.abs()),
-                                Some(what) => fault = Some((l, what)),
+                                Some(what) => fault = Some((l, what, finite_abs(*w))),
                             }
                         }
                         (max, fault)
@@ -941,8 +945,8 @@ impl CoSim {
         let mut step_max = 0.0f64;
         for (max, fault) in links {
             step_max = step_max.max(max);
-            if let Some((l, what)) = fault {
-                self.max_violation = self.max_violation.max(step_max);
+            if let Some((l, what, w)) = fault {
+                self.max_violation = self.max_violation.max(step_max).max(w);
                 return Err(self.link_diverged(t, l, what));
             }
         }
@@ -1100,6 +1104,16 @@ fn link_values(
         node.system.violations()[ll],
         node.system.tension(&node.state, ll),
     )
+}
+
+/// `|w|` if finite, else 0 (a non-finite `|w|` is reported by the divergence error, not
+/// as the run's largest violation).
+fn finite_abs(w: f64) -> f64 {
+    if w.is_finite() {
+        w.abs()
+    } else {
+        0.0
+    }
 }
 
 /// What is wrong with a link's gathered `w` and `f` at the divergence bound, if anything.

@@ -203,6 +203,23 @@ impl Estimate {
     }
 }
 
+/// Checks the integration steps a study (`tradeoff`, `stability-map`) takes over all its
+/// runs, `total`, against [`DEFAULT_MAX_STEPS`]: what `run` refuses for one run, a study
+/// refuses for the sum of its runs, before any of them starts. Its horizon is the one
+/// time a user gives a study, so the error names `flag` (`--duration`).
+pub fn check_study_steps(total: u64, flag: &str) -> Result<()> {
+    if total > DEFAULT_MAX_STEPS {
+        return Err(Error::invalid(
+            flag,
+            format!(
+                "the study would integrate {total} steps over its runs, above the limit of \
+                 {DEFAULT_MAX_STEPS} (shorten the horizon)"
+            ),
+        ));
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -314,6 +331,14 @@ mod tests {
         );
         let m = tight(|l| l.max_memory_bytes = 1_000_000);
         assert!(m.contains("model") && m.contains("--max-memory"), "{m}");
+        let m = check_study_steps(DEFAULT_MAX_STEPS + 1, "--duration")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            m.starts_with("--duration: ") && m.contains("10000000001 steps"),
+            "{m}"
+        );
+        assert!(check_study_steps(DEFAULT_MAX_STEPS, "--duration").is_ok());
         let m = tight(|l| l.max_checkpoints = 10);
         assert!(
             m.contains("--checkpoint-every") && m.contains("1000 checkpoints"),

@@ -25,8 +25,11 @@ pub const MAX_OVERRIDES: usize = 1000;
 /// own bytes.
 pub fn load_with(path: &Path, sets: &[String]) -> Result<(Scenario, String)> {
     if sets.is_empty() {
-        let scenario = super::load(path)?;
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        // Read once: a second read of a pipe would find nothing.
+        let bytes = crate::input::read(path)?;
+        let scenario = super::validate::from_bytes(&bytes, &path.display().to_string())?;
+        // UTF-8: `from_bytes` has checked it.
+        let text = String::from_utf8_lossy(&bytes).into_owned();
         return Ok((scenario, text));
     }
     if sets.len() > MAX_OVERRIDES {
@@ -35,7 +38,7 @@ pub fn load_with(path: &Path, sets: &[String]) -> Result<(Scenario, String)> {
             format!("{} overrides; at most {MAX_OVERRIDES}", sets.len()),
         ));
     }
-    let Ok(text) = std::fs::read_to_string(path) else {
+    let Ok(text) = crate::input::read_text(path) else {
         // Not readable or not UTF-8: the plain loader says which, and where.
         return super::load(path).map(|s| (s, String::new()));
     };

@@ -33,7 +33,8 @@ use serde_json::error::Category;
 use self::bodies::{model, Ids, Model};
 use self::channels::channels;
 use self::checks::{
-    finite, foreign, non_negative, num, positive, required, time, vector, whole_nanos,
+    finite, foreign, magnitude, magnitude_vector, non_negative, num, positive, positive_magnitude,
+    required, time, whole_nanos,
 };
 use self::network::{check_tdma, network};
 use self::partition::partition;
@@ -53,9 +54,15 @@ use crate::kernel::SimTime;
 /// A file that cannot be read is an [`Error::Io`]; a file that is not UTF-8 is an
 /// [`Error::Parse`] at the first bad byte; everything else is as [`parse_str`].
 pub fn load(path: &Path) -> Result<Scenario> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    let label = path.display().to_string();
-    let text = std::str::from_utf8(&bytes).map_err(|e| {
+    let bytes = crate::input::read(path)?;
+    from_bytes(&bytes, &path.display().to_string())
+}
+
+/// Parses and validates the bytes of a scenario file; `label` names it in errors. Bytes
+/// that are not UTF-8 are an [`Error::Parse`] at the first bad byte.
+pub fn from_bytes(bytes: &[u8], label: &str) -> Result<Scenario> {
+    let label = label.to_string();
+    let text = std::str::from_utf8(bytes).map_err(|e| {
         let before = &bytes[..e.valid_up_to()];
         let line = 1 + before.iter().filter(|&&b| b == b'\n').count();
         let column = 1 + before.iter().rev().take_while(|&&b| b != b'\n').count();
@@ -335,9 +342,9 @@ fn stabilizer(s: &StabilizerFile) -> Result<Stabilizer> {
                 return Err(foreign("stabilizer.beta", "smc"));
             }
             Ok(Stabilizer::Smc {
-                mu: positive("stabilizer.mu", s.mu.unwrap_or(DEFAULT_SMC_MU))?,
-                k: positive("stabilizer.k", s.k.unwrap_or(DEFAULT_SMC_K))?,
-                epsilon: positive(
+                mu: smc_mu(s.mu.unwrap_or(DEFAULT_SMC_MU))?,
+                k: positive_magnitude("stabilizer.k", s.k.unwrap_or(DEFAULT_SMC_K))?,
+                epsilon: positive_magnitude(
                     "stabilizer.epsilon",
                     s.epsilon.unwrap_or(DEFAULT_SMC_EPSILON),
                 )?,
@@ -356,11 +363,34 @@ fn stabilizer(s: &StabilizerFile) -> Result<Stabilizer> {
                 .beta
                 .ok_or_else(|| required("stabilizer.beta", "baumgarte"))?;
             Ok(Stabilizer::Baumgarte {
-                alpha: non_negative("stabilizer.alpha", alpha)?,
-                beta: non_negative("stabilizer.beta", beta)?,
+                alpha: magnitude("stabilizer.alpha", non_negative("stabilizer.alpha", alpha)?)?,
+                beta: magnitude("stabilizer.beta", non_negative("stabilizer.beta", beta)?)?,
             })
         }
     }
+}
+
+/// Shortest and longest SMC time constant μ [s]: from the nanosecond of the time grid
+/// to about 30 years. The law divides by μ² and multiplies by it; at μ = 1e155 s, μ²
+/// overflowed and the run stopped blaming a singular J M⁻¹ Jᵀ.
+const SMC_MU_RANGE: (f64, f64) = (1e-9, 1e9);
+
+/// `stabilizer.mu`, within [`SMC_MU_RANGE`].
+fn smc_mu(mu: f64) -> Result<f64> {
+    let mu = positive("stabilizer.mu", mu)?;
+    let (lo, hi) = SMC_MU_RANGE;
+    if !(lo..=hi).contains(&mu) {
+        return Err(Error::invalid(
+            "stabilizer.mu",
+            format!(
+                "must be from {} s to {} s (got {} s)",
+                num(lo),
+                num(hi),
+                num(mu)
+            ),
+        ));
+    }
+    Ok(mu)
 }
 
 /// The `solver` section.
@@ -440,7 +470,7 @@ fn solver(s: &SolverFile) -> Result<Solver> {
 /// One entry of `forces`: body resolved, times in nanoseconds.
 fn force(path: &str, f: &ForceFile, ids: &Ids) -> Result<ForceSpec> {
     let body = ids.index(&format!("{path}.body"), f.body)?;
-    let amplitude = vector(&format!("{path}.amplitude"), f.amplitude)?;
+    let amplitude = magnitude_vector(&format!("{path}.amplitude"), f.amplitude)?;
     let omega = finite(&format!("{path}.omega"), f.omega)?;
     let phase = finite(&format!("{path}.phase"), f.phase)?;
     let from = time(&format!("{path}.from"), f.from)?;

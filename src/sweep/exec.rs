@@ -50,6 +50,10 @@ impl Shard {
     }
 }
 
+/// The lock file of a sweep's output directory (hidden; a run's own is
+/// [`crate::output::run_dir::LOCK_FILE`], in each point's directory).
+pub const SWEEP_LOCK: &str = ".dsmcosim-sweep.lock";
+
 /// What each point keeps of its run (`--keep`).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum Keep {
@@ -144,7 +148,7 @@ fn load(sweep_path: &Path) -> Result<Loaded> {
         Some(dir) => dir.join(&file.base),
         None => PathBuf::from(&file.base),
     };
-    let bytes = std::fs::read(&base_path).map_err(|e| Error::io(&base_path, e))?;
+    let bytes = crate::input::read(&base_path)?;
     let label = base_path.display().to_string();
     let base: Value = serde_json::from_slice(&bytes).map_err(|e| Error::Parse {
         file: label.clone(),
@@ -224,6 +228,11 @@ pub fn run(sweep_path: &Path, out: &Path, options: &Options) -> Result<Report> {
             ),
         ));
     }
+    create_dir_all(out)?;
+    // One sweep at a time in a directory: a second `sweep --resume` (a requeued cluster
+    // task) is refused at once, naming the holder, instead of both rerunning the same
+    // points and neither writing sweep.csv. Held until the sweep returns.
+    let _lock = crate::output::run_dir::lock(out, SWEEP_LOCK, "dsmcosim sweep")?;
     create_dir_all(&out.join("points"))?;
     write_atomic(&out.join("sweep.json"), loaded.text.as_bytes())?;
     let selected: Vec<&Point> = loaded
@@ -321,12 +330,11 @@ fn expected(p: &Point, base_digest: &str) -> Record {
     }
 }
 
-/// Runs point `p` into `out/points/<key>/`: `scenario.json`, the run's outputs,
-/// then `done.json`.
+/// Runs point `p` into `out/points/<key>/`: the run's outputs, `scenario.json`, then
+/// `done.json`.
 fn run_point(out: &Path, loaded: &Loaded, p: &Point, keep: Keep) -> Result<()> {
     let dir = point_dir(out, &p.key);
     create_dir_all(&dir)?;
-    write_atomic(&dir.join("scenario.json"), p.text.as_bytes())?;
     let label = format!("{}_{}", loaded.plan.name, p.key);
     let scenario = crate::scenario::parse_str(&p.text, &label)?;
     let started = Instant::now();
@@ -350,6 +358,9 @@ fn run_point(out: &Path, loaded: &Loaded, p: &Point, keep: Keep) -> Result<()> {
         }
         Err(e) => return Err(e),
     }
+    // After the run, as `dsmcosim run` writes it: before, the point's directory would
+    // hold a file of a run's name and no run (which a run refuses to replace).
+    write_atomic(&dir.join("scenario.json"), p.text.as_bytes())?;
     let wall_seconds = started.elapsed().as_secs_f64();
     let summary_path = dir.join("summary.json");
     let text = std::fs::read_to_string(&summary_path).map_err(|e| Error::io(&summary_path, e))?;

@@ -103,7 +103,7 @@ pub fn parse(text: &str, label: &str) -> Result<SweepFile> {
 
 /// Reads and parses the sweep file at `path`, returning it with its bytes.
 pub fn load(path: &Path) -> Result<(SweepFile, String)> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = crate::input::read_text(path)?;
     let file = parse(&text, &path.display().to_string())?;
     Ok((file, text))
 }

@@ -301,6 +301,21 @@ fn axis(k: usize, a: &AxisFile, earlier: &[Axis]) -> Result<Axis> {
                 format!("must be a non-empty line of text (got {:?})", labels[i]),
             ));
         }
+        // Labels name the rows of sweep.csv and the plots' ticks: two equal ones would
+        // make two points indistinguishable there.
+        let mut seen = std::collections::BTreeMap::new();
+        for (i, l) in labels.iter().enumerate() {
+            if let Some(first) = seen.insert(l.trim(), i) {
+                return Err(Error::invalid(
+                    format!("axes[{k}].labels[{i}]"),
+                    format!(
+                        "repeats labels[{first}] ({:?}); each value of axis `{}` needs its own \
+                         label",
+                        l, a.name
+                    ),
+                ));
+            }
+        }
     }
     if a.labels.is_none() {
         if let Some(i) = values

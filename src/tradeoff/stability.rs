@@ -113,8 +113,9 @@ pub fn stability_map(path: &Path, out: &Path, duration: Option<f64>) -> Result<S
     }
     let total = variants
         .iter()
-        .filter_map(|(_, _, s)| s.as_ref().ok().map(|s| s.steps + 1))
-        .sum();
+        .filter_map(|(_, _, s)| s.as_ref().ok().map(|s| s.steps.saturating_add(1)))
+        .fold(0u64, u64::saturating_add);
+    crate::run::budget::check_study_steps(total, "--duration")?;
     let mut counter = Counter::new(total);
     let mut cells = Vec::with_capacity(variants.len());
     for (mu, dt, parsed) in variants {

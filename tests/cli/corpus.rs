@@ -28,7 +28,8 @@ fn every_reproducer_gets_its_verdict() {
     for (name, want) in entries {
         let file = dir.join(format!("{name}.json"));
         let command = want["command"].as_str().unwrap();
-        let o = super::limits::bounded(&[command, file.to_str().unwrap()], Duration::from_secs(60));
+        let o =
+            super::limits::bounded(&[command, file.to_str().unwrap()], Duration::from_secs(300));
         let code = want["exit"].as_i64().unwrap() as i32;
         assert_eq!(o.status.code(), Some(code), "{name}: {}", said(&o));
         let err = String::from_utf8_lossy(&o.stderr);

@@ -10,6 +10,7 @@ mod check;
 mod contract;
 mod corpus;
 mod limits;
+mod outputs;
 mod overrides;
 
 fn bin() -> Command {

@@ -433,9 +433,12 @@ fn non_positive_physical_values_are_rejected() {
     invalid(set("/model/bodies/1/inertia", json!([0.1, 0.1, -1])), "model.bodies[1].inertia[2]", "got -1");
     invalid(set("/divergence/max_violation", json!(0)), "divergence.max_violation", "must be > 0");
     invalid(set("/measurement/period", json!(0)), "measurement.period", "must be > 0 (got 0)");
-    let tiny = put(base(), "/model/bodies/0/mass", json!(1e-300));
+    let tiny = put(base(), "/model/bodies/0/mass", json!(1e-90));
     let tiny = put(tiny, "/model/bodies/0/size", json!(1e-20)).to_string();
-    invalid(tiny, "model.bodies[0].inertia", "the cube default m s²/6 is 0");
+    invalid(tiny, "model.bodies[0].inertia", "the cube default m s²/6 is 1.6666666666666665e-131");
+    // Masses and moments beyond 1e100 either way: their products leave f64.
+    invalid(set("/model/bodies/0/mass", json!(1e-300)), "model.bodies[0].mass", "magnitude from 1e-100 to 1e100");
+    invalid(set("/model/bodies/1/inertia", json!([0.1, 1e-310, 0.1])), "model.bodies[1].inertia[1]", "got 1e-310");
 }
 
 #[test]
@@ -748,6 +751,20 @@ fn link(ids: Vec<u32>) -> impl Strategy<Value = LinkFile> {
         })
 }
 
+/// `links` without those that join the same two bodies at the same anchors as an
+/// earlier one (in either direction), which validation refuses as given twice.
+fn distinct_links(links: Vec<LinkFile>) -> Vec<LinkFile> {
+    let end = |id: u32, anchor: [f64; 3]| (id, anchor.map(f64::to_bits));
+    let mut seen = std::collections::BTreeSet::new();
+    links
+        .into_iter()
+        .filter(|l| {
+            let (x, y) = (end(l.a, l.anchor_a), end(l.b, l.anchor_b));
+            seen.insert(if x.0 <= y.0 { (x, y) } else { (y, x) })
+        })
+        .collect()
+}
+
 fn force(ids: Vec<u32>) -> impl Strategy<Value = ForceFile> {
     (
         prop::sample::select(ids),
@@ -914,7 +931,9 @@ fn scenario() -> impl Strategy<Value = ScenarioFile> {
     ids.prop_flat_map(|ids| {
         let bodies: Vec<_> = ids.iter().enumerate().map(|(i, &id)| body(i, id)).collect();
         let links = if ids.len() > 1 {
-            prop::collection::vec(link(ids.clone()), 0..8).boxed()
+            prop::collection::vec(link(ids.clone()), 0..8)
+                .prop_map(distinct_links)
+                .boxed()
         } else {
             Just(Vec::new()).boxed()
         };
@@ -1148,4 +1167,92 @@ proptest! {
             Ok(s) => prop_assert!(in_range && s.controller.unwrap().reflections as u64 == dsm_refl),
             Err(e) => prop_assert!(!in_range && e.to_string().contains("controller.dsm.reflections"), "{e}"),
         }    }
+}
+
+/// `m·10^e` for `e` over the whole exponent range of `f64`, subnormals and the
+/// largest finite value included.
+fn any_magnitude() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        (1.0f64..10.0, -330i32..309).prop_map(|(m, e)| m * 10f64.powi(e)),
+        Just(f64::MAX),
+        Just(f64::MIN_POSITIVE / 2.0),
+        Just(5e-324),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { timeout: 300_000, ..ProptestConfig::with_cases(256) })]
+
+    /// Bandwidth and objectives over every magnitude of `k` and `penalty` (issue
+    /// "Hardening, third round": k = 1e308 gave an infinite bandwidth, penalty = 1e308
+    /// infinite objectives): refused naming the field, or every bandwidth `k/τ` at the
+    /// shortest delay and the penalty on it finite.
+    #[test]
+    fn bandwidths_and_objectives_are_finite_or_refused(k in any_magnitude(), penalty in any_magnitude()) {
+        let mut v = part_base();
+        v["channels"][0]["k"] = json!(k);
+        v["controller"] = json!({"problem": "up", "penalty": penalty, "tau_min": 0.001,
+                                 "tau_max": 0.05, "dsm": {"size": 0.002}});
+        match parse_str(&v.to_string(), "k") {
+            Ok(s) => {
+                let c = s.controller.as_ref().unwrap();
+                let bandwidth: f64 = s.channels.iter().map(|ch| ch.k / c.tau_min).sum();
+                prop_assert!(bandwidth.is_finite(), "k {k}: bandwidth {bandwidth}");
+                let dsmcosim::scenario::model::Problem::Unconstrained { penalty } = c.problem else {
+                    panic!("up")
+                };
+                prop_assert!((penalty * bandwidth).is_finite(), "penalty {penalty}");
+            }
+            Err(e) => {
+                let m = e.to_string();
+                prop_assert!(
+                    m.starts_with("channels[0].k:") || m.starts_with("controller.penalty:"),
+                    "{m}"
+                );
+            }
+        }
+    }
+
+    /// Masses, moments of inertia, force amplitudes, ramp scales and the SMC μ over
+    /// every magnitude: refused naming the field, or a run whose first steps are
+    /// finite or stop with a divergence naming a link (never a singular J M⁻¹ Jᵀ, the
+    /// wrong cause that μ = 1e155 or a subnormal inertia gave).
+    #[test]
+    fn magnitudes_give_a_finite_step_or_a_refusal(
+        x in any_magnitude(),
+        (field, name) in prop::sample::select(vec![
+            ("/model/bodies/0/mass", "model.bodies[0].mass"),
+            ("/model/bodies/1/inertia/0", "model.bodies[1].inertia[0]"),
+            ("/forces/0/amplitude/2", "forces[0].amplitude[2]"),
+            ("/forces/0/ramp/a1", "forces[0].ramp.a1"),
+            ("/stabilizer/mu", "stabilizer.mu"),
+            ("/stabilizer/k", "stabilizer.k"),
+        ]),
+    ) {
+        let mut v = base();
+        v["model"]["bodies"][1]["inertia"] = json!([0.1, 0.1, 0.1]);
+        v["forces"][0]["ramp"] = json!({"t0": 0.0, "t1": 0.5, "a0": 1.0, "a1": 2.0});
+        v["duration"] = json!(0.01);
+        v["measurement"] = json!({"period": 0.01});
+        let v = put(v, field, json!(x));
+        match parse_str(&v.to_string(), "m") {
+            Ok(s) => {
+                let dir = tempfile::tempdir().unwrap();
+                match dsmcosim::run::run(&s, dir.path()) {
+                    Ok(_) | Err(Error::Diverged(_)) => {}
+                    // A CG budget may run out on an extreme but legal scene; a singular
+                    // J M⁻¹ Jᵀ is not what a single magnitude can cause.
+                    Err(Error::Numerical { message, .. }) => prop_assert!(
+                        !message.contains("not positive definite"),
+                        "{field} = {x}: {message}"
+                    ),
+                    Err(e) => prop_assert!(false, "{field} = {x}: {e}"),
+                }
+            }
+            Err(e) => {
+                let m = e.to_string();
+                prop_assert!(m.starts_with(&format!("{name}:")), "{field} = {x}: {m}");
+            }
+        }
+    }
 }

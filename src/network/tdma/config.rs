@@ -142,7 +142,10 @@ impl TdmaConfig {
         if self.link_rate.is_nan() || self.link_rate <= 0.0 {
             return Err(TdmaError::config(
                 "link_rate",
-                format!("must be > 0 bit/s (or infinite), got {}", self.link_rate),
+                format!(
+                    "must be > 0 bit/s (or infinite), got {}",
+                    crate::error::num(self.link_rate)
+                ),
             ));
         }
         let statics = self.clients as u64 + 2;
@@ -197,13 +200,19 @@ fn check_ppm(field: &'static str, value: f64) -> Result<(), TdmaError> {
     if !value.is_finite() || value < 0.0 {
         return Err(TdmaError::config(
             field,
-            format!("must be a finite number ≥ 0 ppm, got {value}"),
+            format!(
+                "must be a finite number ≥ 0 ppm, got {}",
+                crate::error::num(value)
+            ),
         ));
     }
     if value >= 1e6 {
         return Err(TdmaError::config(
             field,
-            format!("must be below 10⁶ ppm (a clock cannot stop), got {value}"),
+            format!(
+                "must be below 10⁶ ppm (a clock cannot stop), got {}",
+                crate::error::num(value)
+            ),
         ));
     }
     Ok(())

@@ -27,23 +27,38 @@ pub fn list_broadcast_bytes(entries: usize, header_bytes: u64) -> u64 {
     header_bytes.saturating_add((entries as u64).saturating_mul(LIST_ENTRY_BYTES))
 }
 
+/// Most bytes a static frame is ever counted to carry: more than a slot list of every
+/// (sender, channel) pair of `u16` ids needs (2³² entries of [`LIST_ENTRY_BYTES`]).
+/// A faster link changes nothing past it, so the search below stops there.
+pub const MAX_FRAGMENT_BYTES: u64 = 1 << 40;
+
 /// Slot-list entries one static frame can carry at most: `None` for any number (an
 /// instantaneous link), `Some(0)` when not even one fits beside the header.
+///
+/// The largest byte count whose [`transmission_time`] fits the usable slot, found by
+/// bisection over `[0, MAX_FRAGMENT_BYTES]` (transmission time does not decrease with
+/// bytes): at most 41 probes whatever the rate. (Stepping from the rate's estimate
+/// wrapped `u64::MAX + 1` at rates of 10²⁵ bit/s and beyond and never ended.)
 pub fn entries_per_fragment(cfg: &TdmaConfig) -> Option<usize> {
     if cfg.link_rate.is_infinite() {
         return None;
     }
     let usable = cfg.usable();
     let fits = |b: u64| transmission_time(b, cfg.link_rate) <= usable;
-    // The estimate from the rate, then corrected against the exact rounding.
-    let mut bytes = (usable.0 as f64 * cfg.link_rate / 8e9).floor() as u64;
-    while fits(bytes + 1) {
-        bytes += 1;
+    // Invariant: fits(lo) (0 bytes take no time), and hi + 1 does not fit or hi is the cap.
+    let (mut lo, mut hi) = (0u64, MAX_FRAGMENT_BYTES);
+    if fits(hi) {
+        lo = hi;
     }
-    while bytes > 0 && !fits(bytes) {
-        bytes -= 1;
+    while lo < hi {
+        let mid = lo + (hi - lo).div_ceil(2);
+        if fits(mid) {
+            lo = mid;
+        } else {
+            hi = mid - 1;
+        }
     }
-    let entries = bytes.saturating_sub(cfg.header_bytes) / LIST_ENTRY_BYTES;
+    let entries = lo.saturating_sub(cfg.header_bytes) / LIST_ENTRY_BYTES;
     Some(usize::try_from(entries).unwrap_or(usize::MAX))
 }
 
@@ -211,6 +226,50 @@ mod tests {
         cfg.link_rate = f64::INFINITY;
         assert_eq!(entries_per_fragment(&cfg), None);
         assert_eq!(broadcast_fragments(1000, None), 1);
+    }
+
+    /// Rates up to the largest finite `f64` give a count at once (a rate of 10²⁵ bit/s
+    /// and beyond once wrapped a `u64` and spun forever), never fewer entries at a
+    /// faster rate, and what fits is exactly what the transmission time allows.
+    #[test]
+    fn every_finite_rate_gives_a_fragment_size() {
+        use proptest::prelude::*;
+        let mut runner = proptest::test_runner::TestRunner::new(ProptestConfig::with_cases(512));
+        let rates = (0i32..309, 1.0f64..10.0).prop_map(|(e, m)| (m * 10f64.powi(e)).min(f64::MAX));
+        runner
+            .run(
+                &(rates, 1u64..1_000_000, 0u64..200),
+                |(rate, usable_ns, header)| {
+                    let mut cfg =
+                        TdmaConfig::new(2, SimTime(usable_ns + 1), SimTime(1_000_000_000));
+                    cfg.guard = SimTime(1);
+                    cfg.header_bytes = header;
+                    cfg.link_rate = rate;
+                    let n = entries_per_fragment(&cfg).expect("a finite rate") as u64;
+                    let bytes = header + n * LIST_ENTRY_BYTES;
+                    if n > 0 {
+                        prop_assert!(transmission_time(bytes, rate) <= cfg.usable());
+                    }
+                    // One entry more does not fit (below the cap).
+                    let more = header + (n + 1) * LIST_ENTRY_BYTES;
+                    if more <= MAX_FRAGMENT_BYTES {
+                        prop_assert!(transmission_time(more, rate) > cfg.usable());
+                    }
+                    cfg.link_rate = (rate * 2.0).min(f64::MAX);
+                    prop_assert!(entries_per_fragment(&cfg).expect("finite") as u64 >= n);
+                    Ok(())
+                },
+            )
+            .unwrap();
+        let mut cfg = TdmaConfig::new(2, SimTime(100_000), SimTime(1_000_000));
+        cfg.link_rate = 1e25;
+        assert_eq!(
+            entries_per_fragment(&cfg),
+            Some(
+                usize::try_from((MAX_FRAGMENT_BYTES - cfg.header_bytes) / LIST_ENTRY_BYTES)
+                    .unwrap()
+            )
+        );
     }
 
     #[test]

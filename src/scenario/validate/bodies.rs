@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
-use super::checks::{finite, num, positive, vec_str, vector};
+use super::checks::{finite, num, positive, positive_magnitude, vec_str, vector, MAGNITUDE};
 use crate::error::{Error, Result};
 use crate::scenario::file::{BodyFile, BodyModelFile, LinkFile, ModelFile};
 use crate::scenario::grid;
@@ -71,6 +71,7 @@ pub(super) fn model(model: &ModelFile, choice: BodyModelFile) -> Result<Model> {
         .enumerate()
         .map(|(i, l)| link(&format!("model.links[{i}]"), l, &ids, &bodies))
         .collect::<Result<Vec<_>>>()?;
+    no_duplicate_links(&links, &link_files)?;
     let body_model = body_model(choice, &body_files, &link_files)?;
     Ok(Model {
         bodies,
@@ -93,20 +94,65 @@ impl Ids {
     }
 }
 
+/// Refuses a link that joins the same two bodies at the same anchors as an earlier one
+/// (in either direction): its constraint is the earlier one's again, so `J M⁻¹ Jᵀ` is
+/// singular — the exact solve stopped at t = 0 naming no link, CG ran on. Two links
+/// between the same bodies at other anchors (a hinge of rigid bodies) are fine.
+fn no_duplicate_links(links: &[LinkSpec], files: &[LinkFile]) -> Result<()> {
+    // The ends in body order with their anchors (bit for bit).
+    let ends = |l: &LinkSpec| {
+        let bits = |v: &Vector3<f64>| v.map(f64::to_bits);
+        let (ea, eb) = ((l.a, bits(&l.anchor_a)), (l.b, bits(&l.anchor_b)));
+        if ea.0 <= eb.0 {
+            (ea, eb)
+        } else {
+            (eb, ea)
+        }
+    };
+    // Links sorted by their pair of bodies (24 bytes a link: a million-body grid's two
+    // million links take 48 MB here, freed before the run), then each run of links
+    // between the same pair compared by anchors.
+    let mut pairs: Vec<(usize, usize, usize)> = links
+        .iter()
+        .enumerate()
+        .map(|(i, l)| (l.a.min(l.b), l.a.max(l.b), i))
+        .collect();
+    pairs.sort_unstable();
+    for run in pairs.chunk_by(|x, y| (x.0, x.1) == (y.0, y.1)) {
+        for (k, &(_, _, i)) in run.iter().enumerate() {
+            let Some(&(_, _, first)) = run[..k]
+                .iter()
+                .find(|&&(_, _, j)| ends(&links[j]) == ends(&links[i]))
+            else {
+                continue;
+            };
+            return Err(Error::invalid(
+                format!("model.links[{i}]"),
+                format!(
+                    "joins bodies {} and {} at the same anchors as model.links[{first}]; a \
+                     constraint given twice makes J M⁻¹ Jᵀ singular (remove one)",
+                    files[i].a, files[i].b
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// One body: checked values, defaults applied.
 fn body(path: &str, b: &BodyFile) -> Result<BodySpec> {
-    let mass = positive(&format!("{path}.mass"), b.mass)?;
+    let mass = positive_magnitude(&format!("{path}.mass"), b.mass)?;
     let size = positive(&format!("{path}.size"), b.size)?;
     let inertia = match b.inertia {
         Some(moments) => {
             for (i, &m) in moments.iter().enumerate() {
-                positive(&format!("{path}.inertia[{i}]"), m)?;
+                positive_magnitude(&format!("{path}.inertia[{i}]"), m)?;
             }
             Vector3::from(moments)
         }
         None => {
             let cube = mass * size * size / 6.0;
-            if !(cube.is_finite() && cube > 0.0) {
+            if !(cube.is_finite() && (1.0 / MAGNITUDE..=MAGNITUDE).contains(&cube)) {
                 return Err(Error::invalid(
                     format!("{path}.inertia"),
                     format!(

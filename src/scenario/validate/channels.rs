@@ -137,7 +137,9 @@ fn channel(
             ),
         ));
     }
-    let k = positive(&format!("{path}.k"), c.k)?;
+    // Within the magnitude range a bandwidth k/τ (τ ≥ 1 ns) and its sum stay finite: at
+    // k = 1e308 `bandwidth` was inf in epochs.csv and null in summary.json.
+    let k = super::checks::positive_magnitude(&format!("{path}.k"), c.k)?;
     let borders = match &c.borders {
         Some(list) => Some(channel_borders(
             &format!("{path}.borders"),

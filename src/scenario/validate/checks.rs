@@ -8,16 +8,7 @@ use nalgebra::Vector3;
 use crate::error::{Error, Result};
 use crate::kernel::SimTime;
 
-/// Formats a number for an error message: plain for ordinary magnitudes (`-1`, `0.05`),
-/// exponent form for tiny or huge ones (`1e-300`), `NaN`/`inf` as Rust spells them.
-pub(in crate::scenario) fn num(x: f64) -> String {
-    let a = x.abs();
-    if x == 0.0 || !x.is_finite() || (1e-4..1e16).contains(&a) {
-        format!("{x}")
-    } else {
-        format!("{x:e}")
-    }
-}
+pub(in crate::scenario) use crate::error::num;
 
 /// Formats a vector for an error message: `[0.1, 0, 0]`.
 pub(super) fn vec_str(v: &[f64]) -> String {
@@ -59,6 +50,44 @@ pub(super) fn non_negative(path: &str, x: f64) -> Result<f64> {
             format!("must be ≥ 0 (got {})", num(x)),
         ))
     }
+}
+
+/// Largest magnitude of a mass, moment of inertia, force amplitude, gain or scale
+/// factor, and the inverse of the smallest nonzero one. Within it, the products and
+/// quotients of the step (`M⁻¹`, `J M⁻¹ Jᵀ`, `F/m`, `K/μ²`) stay far inside the range
+/// of `f64`; beyond it a finite value gave non-finite accelerations, which the solve
+/// then reported as a singular `J M⁻¹ Jᵀ` (the wrong cause).
+pub(in crate::scenario) const MAGNITUDE: f64 = 1e100;
+
+/// `x` if it is finite and 0 or of magnitude in [1/[`MAGNITUDE`], [`MAGNITUDE`]].
+pub(in crate::scenario) fn magnitude(path: &str, x: f64) -> Result<f64> {
+    let a = finite(path, x)?.abs();
+    if x == 0.0 || (1.0 / MAGNITUDE..=MAGNITUDE).contains(&a) {
+        Ok(x)
+    } else {
+        Err(Error::invalid(
+            path,
+            format!(
+                "must have a magnitude from 1e-100 to 1e100 (or be 0) (got {}; the step's \
+                 products would leave the range of floating point)",
+                num(x)
+            ),
+        ))
+    }
+}
+
+/// `x` if it is > 0 and within [`magnitude`]'s range.
+pub(in crate::scenario) fn positive_magnitude(path: &str, x: f64) -> Result<f64> {
+    magnitude(path, positive(path, x)?)
+}
+
+/// A vector whose components are within [`magnitude`]'s range (an error names the
+/// component: `[1]`).
+pub(super) fn magnitude_vector(path: &str, v: [f64; 3]) -> Result<Vector3<f64>> {
+    for (i, &x) in v.iter().enumerate() {
+        magnitude(&format!("{path}[{i}]"), x)?;
+    }
+    Ok(Vector3::from(v))
 }
 
 /// A vector whose components are all finite (an error names the component: `[1]`).

@@ -43,12 +43,7 @@ pub(super) fn ramp(path: &str, r: &RampFile) -> Result<Ramp> {
         ));
     }
     for (key, v) in [("a0", r.a0), ("a1", r.a1)] {
-        if !v.is_finite() {
-            return Err(Error::invalid(
-                format!("{path}.{key}"),
-                format!("must be a finite number (got {})", num(v)),
-            ));
-        }
+        super::checks::magnitude(&format!("{path}.{key}"), v)?;
     }
     Ok(Ramp {
         t0,
@@ -98,6 +93,10 @@ pub(super) fn controller(
                     format!("must be ≥ 0 (got {})", num(penalty)),
                 ));
             }
+            // Within the magnitude range, penalty × bandwidth (≤ 1e100 × 1e109 per
+            // channel) stays finite: at 1e308 every objective was infinite and the DSM
+            // drove every delay to tau_min.
+            super::checks::magnitude("controller.penalty", penalty)?;
             if n < 1 {
                 return Err(Error::invalid(
                     "controller",
@@ -215,7 +214,21 @@ pub(super) fn controller(
                     "needs \"method\": \"dsm\"",
                 ));
             }
-            Some(positive("controller.dsm_delta", d)?)
+            let d = positive("controller.dsm_delta", d)?;
+            // DSM ± δ must be able to stay in [tau_min, tau_max] for one sign at least;
+            // from the box's width on, both leave it and their columns are always NaN.
+            if d >= tau_max - tau_min {
+                return Err(Error::invalid(
+                    "controller.dsm_delta",
+                    format!(
+                        "must be below tau_max − tau_min = {} s, the width of the delay box \
+                         (got {} s; DSM ± δ would always leave the box)",
+                        num(tau_max - tau_min),
+                        num(d)
+                    ),
+                ));
+            }
+            Some(d)
         }
     };
     let grid_step = positive("controller.grid_step", c.grid_step)?;

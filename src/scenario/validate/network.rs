@@ -182,6 +182,30 @@ fn slot_list(list: &[SlotEntryFile], nodes: usize, channels: &[ChannelSpec]) -> 
                             ),
                         )
                     })?;
+                // A data slot is a partition node's (1 to N): the server (0) has no
+                // data, and a node none of whose borders the channel carries has
+                // nothing to send on it.
+                if node == 0 {
+                    return Err(Error::invalid(
+                        format!("{path}.node"),
+                        format!(
+                            "node 0 is the server, which sends no data; a slot of channel \
+                             \"{name}\" goes to one of nodes 1 to {nodes}"
+                        ),
+                    ));
+                }
+                if let Some(borders) = &channels[channel].borders {
+                    let n = node - 1;
+                    if !borders.iter().any(|&(a, b)| a == n || b == n) {
+                        return Err(Error::invalid(
+                            format!("{path}.node"),
+                            format!(
+                                "node {node} has no border on channel \"{name}\", so nothing \
+                                 to send on it"
+                            ),
+                        ));
+                    }
+                }
                 Some(SlotEntry {
                     sender: node,
                     channel,

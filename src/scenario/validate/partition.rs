@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 use crate::kernel::SimTime;
 
 use super::bodies::Ids;
-use crate::error::{Error, Result};
+use crate::error::{num, Error, Result};
 use crate::scenario::file::{
     CouplingFile, CouplingName, CouplingSpecFile, GhostsFile, GridFile, LinkOwnerFile,
     PartitionFile,
@@ -131,7 +131,7 @@ fn coupling(c: &CouplingFile) -> Result<Coupling> {
         Some(t) if (0.0..=max).contains(&secs) => Ok(t),
         _ => Err(Error::invalid(
             format!("partition.coupling.{field}"),
-            format!("must be a time between 0 and {max} s, got {secs}"),
+            format!("must be a time between 0 and {max} s, got {}", num(secs)),
         )),
     };
     let extrapolate = time(
@@ -143,7 +143,7 @@ fn coupling(c: &CouplingFile) -> Result<Coupling> {
     if let Some(z) = impedance.filter(|z| !(z.is_finite() && *z > 0.0)) {
         return Err(Error::invalid(
             "partition.coupling.impedance",
-            format!("must be a finite impedance > 0 N·s/m, got {z}"),
+            format!("must be a finite impedance > 0 N·s/m, got {}", num(z)),
         ));
     }
     let above = time(
@@ -159,7 +159,7 @@ fn coupling(c: &CouplingFile) -> Result<Coupling> {
             if !(tank.is_finite() && tank >= 0.0) {
                 return Err(Error::invalid(
                     "partition.coupling.tank",
-                    format!("must be a finite energy ≥ 0 J, got {tank}"),
+                    format!("must be a finite energy ≥ 0 J, got {}", num(tank)),
                 ));
             }
             Ok(Coupling::Passive {
