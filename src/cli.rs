@@ -19,11 +19,42 @@ macro_rules! say {
     };
 }
 
+/// The version line: the crate's version, the commit the binary was built from
+/// (`-dirty` when the checkout had changes) and the compiler, as `summary.json` records
+/// them.
+pub static VERSION: std::sync::LazyLock<String> = std::sync::LazyLock::new(|| {
+    let commit = env!("DSMCOSIM_GIT_COMMIT");
+    let commit = match commit.split_once('-') {
+        Some((hash, rest)) => format!("{}-{rest}", &hash[..hash.len().min(12)]),
+        None if commit.is_empty() => "unknown".to_string(),
+        None => commit[..commit.len().min(12)].to_string(),
+    };
+    let rustc = env!("DSMCOSIM_RUSTC");
+    let rustc = if rustc.is_empty() {
+        "rustc unknown"
+    } else {
+        rustc
+    };
+    format!("{} (commit {commit}, {rustc})", env!("CARGO_PKG_VERSION"))
+});
+
 /// Deterministic co-simulator of distributed multi-body simulations with SMC
 /// stabilization and delay optimization.
 #[derive(Debug, Parser)]
-#[command(name = "dsmcosim", version, about, long_about = None)]
+#[command(name = "dsmcosim", version = VERSION.as_str(), about, long_about = None)]
+#[command(after_help = "Example: dsmcosim run scenarios/grid16_space_fixed.json -o runs/first")]
 pub struct Cli {
+    /// Worker threads for the parallel parts (sweep points, `check` reruns, the nodes of
+    /// a partitioned run); default: one per core, or RAYON_NUM_THREADS. Results do not
+    /// depend on it.
+    #[arg(short = 'j', long, global = true, value_name = "N")]
+    pub jobs: Option<std::num::NonZeroUsize>,
+    /// Print errors and warnings only: no progress bars, no summary lines.
+    #[arg(short, long, global = true, conflicts_with = "verbose")]
+    pub quiet: bool,
+    /// `run`: also print the run's plan (what `validate` prints) before it starts.
+    #[arg(short, long, global = true)]
+    pub verbose: bool,
     /// What to do.
     #[command(subcommand)]
     pub command: Command,
@@ -32,12 +63,15 @@ pub struct Cli {
 /// The subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Check a scenario file and print its plan: bodies and links, each node's bodies,
-    /// ghosts and links, each channel's requested and achieved τ, latency, bandwidth
-    /// and routes, the TDMA cycle with its slot list, the controller, and what a run
-    /// will cost (steps, messages, kernel events, trace rows and bytes). Writes nothing
-    /// but the --json file. Refuses (exit 2) what `run` would refuse, the limits
-    /// included.
+    /// Check a scenario file and print its plan, writing nothing.
+    ///
+    /// Example: `dsmcosim validate scenarios/tdma4_space_fixed.json`
+    ///
+    /// The plan: bodies and links, each node's bodies, ghosts and links, each channel's
+    /// requested and achieved τ, latency, bandwidth and routes, the TDMA cycle with its
+    /// slot list, the controller, and what a run will cost (steps, messages, kernel
+    /// events, trace rows and bytes). Writes nothing but the --json file. Refuses (exit
+    /// 2) what `run` would refuse, the limits included.
     Validate {
         /// Scenario file (JSON).
         scenario: PathBuf,
@@ -57,6 +91,9 @@ pub enum Command {
     /// Run a scenario and write summary.json, trace.csv, epochs.csv, SVG plots and a copy
     /// of the scenario file (scenario.json).
     ///
+    /// Example: `dsmcosim run scenarios/grid16_space_fixed.json -o runs/first --set
+    /// /channels/0/tau=0.004`
+    ///
     /// One run per output directory: a second run into a directory in use exits 1
     /// naming the holder; a directory holding another scenario's run is refused (exit 2)
     /// unless --force; the previous run's outputs are replaced, and those this run does
@@ -73,7 +110,7 @@ pub enum Command {
         #[arg(long = "set", value_name = "POINTER=VALUE")]
         sets: Vec<String>,
         /// Output directory (created if missing; files in it are replaced atomically).
-        #[arg(long)]
+        #[arg(short, long)]
         out: PathBuf,
         /// Replace another scenario's run in --out.
         #[arg(long)]
@@ -88,11 +125,14 @@ pub enum Command {
     },
     /// Finish a run from one of its checkpoints, with the same digest as an
     /// uninterrupted run; writes every output (the trace from t = 0) into --out.
+    ///
+    /// Example: `dsmcosim resume runs/first/checkpoints/t_000010.000000000.ckpt -o
+    /// runs/first` (after `dsmcosim run … --checkpoint-every 5`)
     Resume {
         /// A checkpoint file written by `run --checkpoint-every`.
         checkpoint: PathBuf,
         /// Output directory (claimed as by `run`).
-        #[arg(long)]
+        #[arg(short, long)]
         out: PathBuf,
         /// Replace another scenario's run in --out.
         #[arg(long)]
@@ -105,6 +145,8 @@ pub enum Command {
         checkpoint_every: Option<f64>,
     },
     /// Rerun scenarios and compare each with its stored run, bit for bit by default.
+    ///
+    /// Example: `dsmcosim check scenarios/*.json --against results/ --work /tmp/reruns`
     ///
     /// One scenario with a DIR that holds a summary.json: DIR is its stored run. Else
     /// (several scenarios, or a DIR without summary.json) each scenario's stored run is
@@ -158,14 +200,21 @@ pub enum Command {
     /// network on partitioned scenes) one at a time and measure each variant against a
     /// monolithic RK4 reference at dt/20.
     ///
+    /// Example: `dsmcosim tradeoff scenarios/grid16_monolithic.json -o runs/tradeoff
+    /// --duration 3`
+    ///
     /// Writes tradeoff.csv, tradeoff.md, work_precision.svg and pareto.svg into DIR.
     /// Exit codes: 0 done (diverged variants are rows, not failures), 1 I/O failure,
     /// 2 bad scenario or --duration, 3 the reference itself failed.
     Tradeoff {
         /// Scenario file (JSON).
         scenario: PathBuf,
+        /// Change a value of the scenario before the study (`POINTER=VALUE`, as for
+        /// `run`); repeatable, applied in order.
+        #[arg(long = "set", value_name = "POINTER=VALUE")]
+        sets: Vec<String>,
         /// Output directory (created if missing).
-        #[arg(long, value_name = "DIR")]
+        #[arg(short, long, value_name = "DIR")]
         out: PathBuf,
         /// Horizon [s] instead of the scenario's duration (rounded down to a whole
         /// number of the sweep's largest dt). Chaotic scenes need a short one.
@@ -175,13 +224,20 @@ pub enum Command {
     /// Stability map: run the scenario over SMC μ (1 ms … 1 s) × dt (0.1 … 10 ms) and
     /// classify each cell: 0 max|w| ≤ ε, 1 ran with max|w| > ε, 2 diverged.
     ///
+    /// Example: `dsmcosim stability-map scenarios/grid16_monolithic.json -o runs/map
+    /// --duration 12`
+    ///
     /// Writes stability_map.csv, stability_map.md, stability_map.svg and
     /// stability_max_w.svg into DIR.
     StabilityMap {
         /// Scenario file (JSON) with an SMC stabilizer.
         scenario: PathBuf,
+        /// Change a value of the scenario before the study (`POINTER=VALUE`, as for
+        /// `run`); repeatable, applied in order.
+        #[arg(long = "set", value_name = "POINTER=VALUE")]
+        sets: Vec<String>,
         /// Output directory (created if missing).
-        #[arg(long, value_name = "DIR")]
+        #[arg(short, long, value_name = "DIR")]
         out: PathBuf,
         /// Horizon [s] instead of the scenario's duration (rounded down to 10 ms).
         #[arg(long, value_name = "S")]
@@ -190,6 +246,8 @@ pub enum Command {
     /// Coupling study: every coupling scheme (reset, predict, passive) × delay τ (3, 5,
     /// 8, 10, 15, 20, 30, 50 ms, latency = τ) × distribution (space, time) on a
     /// partitioned scenario, on ideal channels without its controller.
+    ///
+    /// Example: `dsmcosim coupling scenarios/mechanisms/ring12.json -o runs/ring`
     ///
     /// Per cell: bounded or not, max |w|, RMS position error of the first and last body
     /// over 0–3 s vs the monolithic run and vs the same scheme at τ = dt, kinetic-energy
@@ -200,8 +258,12 @@ pub enum Command {
     Coupling {
         /// Scenario file (JSON) with a partition.
         scenario: PathBuf,
+        /// Change a value of the scenario before the study (`POINTER=VALUE`, as for
+        /// `run`); repeatable, applied in order.
+        #[arg(long = "set", value_name = "POINTER=VALUE")]
+        sets: Vec<String>,
         /// Output directory (created if missing).
-        #[arg(long, value_name = "DIR")]
+        #[arg(short, long, value_name = "DIR")]
         out: PathBuf,
         /// Horizon [s] instead of the scenario's duration.
         #[arg(long, value_name = "S")]
@@ -209,6 +271,9 @@ pub enum Command {
     },
     /// Distance of body positions from a reference run: how long runs of a chaotic scene
     /// stay comparable.
+    ///
+    /// Example: `dsmcosim distance results/grid16_monolithic results/grid16_space_fixed
+    /// --bodies 1,16 -o runs/distance`
     ///
     /// Reads trace.csv of REFERENCE and of each RUN directory (traced at the same
     /// times) and writes DIR/distance.csv (t, then |p_run − p_ref| [m] per run and body)
@@ -224,11 +289,13 @@ pub enum Command {
         #[arg(long, value_delimiter = ',', required = true)]
         bodies: Vec<u32>,
         /// Output directory (created if missing).
-        #[arg(long, value_name = "DIR")]
+        #[arg(short, long, value_name = "DIR")]
         out: PathBuf,
     },
     /// What-if sweep: run a base scenario with fields set from the axes of a sweep file,
     /// one run per point, in parallel.
+    ///
+    /// Example: `dsmcosim sweep scenarios/sweeps/tdma4_slot_layouts.json -o runs/sweep -j 2`
     ///
     /// Writes DIR/sweep.json (a copy of the sweep file), DIR/points/KEY/ for each point (its
     /// scenario.json, run outputs and done.json), DIR/sweep.csv (one row per point),
@@ -240,7 +307,7 @@ pub enum Command {
         /// Sweep file (JSON).
         sweep: PathBuf,
         /// Output directory (created if missing).
-        #[arg(long, value_name = "DIR")]
+        #[arg(short, long, value_name = "DIR")]
         out: PathBuf,
         /// Continue the sweep in DIR: skip points whose done.json records the same point
         /// (axis values, seed, scenario), rerun the rest.
@@ -275,7 +342,26 @@ pub enum Command {
     /// key for editors' completion.
     Schema {
         /// Output directory (created if missing).
-        #[arg(long, value_name = "DIR")]
+        #[arg(short, long, value_name = "DIR")]
+        out: PathBuf,
+    },
+    /// Print a shell completion script for SHELL on standard output, generated from
+    /// this command line's definition.
+    ///
+    /// Example: `dsmcosim completions bash > ~/.local/share/bash-completion/completions/dsmcosim`
+    /// (zsh: into a directory of $fpath as `_dsmcosim`; fish:
+    /// `~/.config/fish/completions/dsmcosim.fish`).
+    Completions {
+        /// bash, zsh, fish, elvish or powershell.
+        shell: clap_complete::Shell,
+    },
+    /// Write the manual pages (dsmcosim.1 and one dsmcosim-COMMAND.1 per subcommand),
+    /// generated from this command line's definition, into DIR.
+    ///
+    /// Example: `dsmcosim man -o ~/.local/share/man/man1 && man dsmcosim-run`.
+    Man {
+        /// Output directory (created if missing).
+        #[arg(short, long, value_name = "DIR")]
         out: PathBuf,
     },
 }
@@ -283,6 +369,18 @@ pub enum Command {
 /// Entry point of the binary.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
+    if cli.quiet {
+        crate::console::hush();
+        crate::progress::silence();
+    }
+    if let Some(n) = cli.jobs {
+        // The global pool is built once, before any parallel work; it cannot already
+        // exist here, and if it did the runs would still be the same bits.
+        let _ = rayon::ThreadPoolBuilder::new()
+            .num_threads(n.get())
+            .build_global();
+    }
+    VERBOSE.store(cli.verbose, std::sync::atomic::Ordering::Relaxed);
     let result = execute(cli.command);
     // Output lost on stdout fails a command that otherwise succeeded (exit 1, as any
     // I/O failure); a failed command keeps its own exit code.
@@ -299,6 +397,32 @@ pub fn main() -> ExitCode {
         }
     }
 }
+
+/// Writes `dsmcosim.1` and one `dsmcosim-COMMAND.1` per subcommand into `out`
+/// (created if missing), each replaced atomically; returns the paths written.
+fn write_man_pages(out: &std::path::Path) -> crate::Result<Vec<PathBuf>> {
+    let command = <Cli as clap::CommandFactory>::command();
+    crate::output::create_dir_all(out)?;
+    let mut pages = vec![("dsmcosim".to_string(), command.clone())];
+    for sub in command.get_subcommands().filter(|s| s.get_name() != "help") {
+        let name = format!("dsmcosim-{}", sub.get_name());
+        pages.push((name.clone(), sub.clone().name(name)));
+    }
+    let mut written = Vec::new();
+    for (name, page) in pages {
+        let path = out.join(format!("{name}.1"));
+        let mut roff = Vec::new();
+        clap_mangen::Man::new(page)
+            .render(&mut roff)
+            .map_err(|e| crate::Error::io(&path, e))?;
+        crate::output::write_atomic(&path, &roff)?;
+        written.push(path);
+    }
+    Ok(written)
+}
+
+/// `--verbose` (read by `run`).
+static VERBOSE: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
 /// Limits a run is checked against before it starts (`crate::run::budget`).
 #[derive(Debug, Clone, Copy, clap::Args)]
@@ -464,6 +588,10 @@ pub fn execute(command: Command) -> crate::Result<()> {
         } => {
             let options = run_options(checkpoint_every, force, limits)?;
             let (s, text) = scenario::load_with(&scenario, &sets)?;
+            if VERBOSE.load(std::sync::atomic::Ordering::Relaxed) {
+                let plan = crate::run::plan::plan(&s)?;
+                say!("{}: {}", scenario.display(), plan.text());
+            }
             let result = crate::run::run_with(&s, &out, options);
             // The run directory keeps the scenario it ran, overrides applied (also
             // beside a diverged run's outputs, which are a result too).
@@ -552,26 +680,43 @@ pub fn execute(command: Command) -> crate::Result<()> {
             }
             Ok(())
         }
+        Command::Completions { shell } => {
+            let mut command = <Cli as clap::CommandFactory>::command();
+            let mut script = Vec::new();
+            clap_complete::generate(shell, &mut command, "dsmcosim", &mut script);
+            say!("{}", String::from_utf8_lossy(&script).trim_end());
+            Ok(())
+        }
+        Command::Man { out } => {
+            for path in write_man_pages(&out)? {
+                say!("wrote {}", path.display());
+            }
+            Ok(())
+        }
         Command::Tradeoff {
             scenario,
+            sets,
             out,
             duration,
-        } => crate::tradeoff::command_tradeoff(&scenario, &out, duration),
+        } => crate::tradeoff::command_tradeoff(&scenario, &sets, &out, duration),
         Command::StabilityMap {
             scenario,
+            sets,
             out,
             duration,
-        } => crate::tradeoff::command_stability_map(&scenario, &out, duration),
+        } => crate::tradeoff::command_stability_map(&scenario, &sets, &out, duration),
         Command::Coupling {
             scenario,
+            sets,
             out,
             duration,
         } => {
             let mut bar = crate::progress::Progress::with_unit(0, "runs");
-            let cells = crate::coupling_study::study(&scenario, &out, duration, &mut |k, n| {
-                bar.set_total(n as u64);
-                bar.tick(k as u64);
-            })?;
+            let cells =
+                crate::coupling_study::study(&scenario, &sets, &out, duration, &mut |k, n| {
+                    bar.set_total(n as u64);
+                    bar.tick(k as u64);
+                })?;
             bar.finish();
             let bounded = cells.iter().filter(|c| c.bounded()).count();
             say!("{} cells, {} bounded", cells.len(), bounded);

@@ -5,15 +5,28 @@
 //! ignored: the first such error is kept, and [`crate::cli::main`] reports it and exits
 //! 1 once the command is done (unless the command failed itself).
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
 
 /// The first error writing standard output, if any.
 static FAILED: Mutex<Option<String>> = Mutex::new(None);
 
-/// Prints a line to stdout; a write error is remembered for [`take_failure`], never a
-/// panic.
+/// `--quiet`: lines for a person are not printed (errors and warnings still are, on
+/// stderr).
+static QUIET: AtomicBool = AtomicBool::new(false);
+
+/// Stops [`say`] from printing (`dsmcosim -q`).
+pub fn hush() {
+    QUIET.store(true, Ordering::Relaxed);
+}
+
+/// Prints a line to stdout (nothing under `--quiet`); a write error is remembered for
+/// [`take_failure`], never a panic.
 pub fn say(line: std::fmt::Arguments) {
     use std::io::Write as _;
+    if QUIET.load(Ordering::Relaxed) {
+        return;
+    }
     let mut out = std::io::stdout().lock();
     // stdout is line-buffered: the newline flushes, so a full disk shows here; the
     // explicit flush covers a line without one reaching the device.

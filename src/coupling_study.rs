@@ -280,17 +280,17 @@ fn cell_scenario(
     v
 }
 
-/// Runs the study of the scenario at `path` (over `duration` seconds if given) and
-/// writes its files into `out`. `progress` is told each finished run.
+/// Runs the study of the scenario at `path` with the `--set` overrides `sets` applied
+/// (over `duration` seconds if given) and writes its files into `out`. `progress` is
+/// told each finished run.
 pub fn study(
     path: &Path,
+    sets: &[String],
     out: &Path,
     duration: Option<f64>,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Vec<Cell>> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    let label = path.display().to_string();
-    let scenario = parse_str(&text, &label)?;
+    let (scenario, text) = crate::scenario::load_with(path, sets)?;
     if scenario.partition.is_none() || scenario.links.is_empty() {
         return Err(Error::invalid(
             "partition",

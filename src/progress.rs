@@ -11,6 +11,14 @@ thread_local! {
     static QUIET: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
 }
 
+/// `--quiet`: no bar anywhere in the process.
+static SILENT: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Hides every bar of the process from now on (`dsmcosim -q`).
+pub fn silence() {
+    SILENT.store(true, std::sync::atomic::Ordering::Relaxed);
+}
+
 /// Runs `f` with every bar created on this thread inside it hidden (a sweep's points,
 /// whose own bars would draw over the sweep's).
 pub fn quietly<T>(f: impl FnOnce() -> T) -> T {
@@ -51,7 +59,9 @@ impl Progress {
             bar,
             started: Instant::now(),
             shown: false,
-            enabled: std::io::stderr().is_terminal() && !QUIET.with(|q| q.get()),
+            enabled: std::io::stderr().is_terminal()
+                && !QUIET.with(|q| q.get())
+                && !SILENT.load(std::sync::atomic::Ordering::Relaxed),
         }
     }
 

@@ -143,12 +143,10 @@ pub struct Options {
 }
 
 /// Reads a scenario file: the raw JSON (to edit) and the validated base.
-pub fn load_json(path: &Path) -> Result<(Value, Scenario)> {
-    let text = crate::input::read_text(path)?;
-    let label = path.display().to_string();
-    let scenario = parse_str(&text, &label)?;
-    let json: Value =
-        serde_json::from_str(&text).map_err(|e| Error::invalid(label, format!("not JSON: {e}")))?;
+pub fn load_json(path: &Path, sets: &[String]) -> Result<(Value, Scenario)> {
+    let (scenario, text) = crate::scenario::load_with(path, sets)?;
+    let json: Value = serde_json::from_str(&text)
+        .map_err(|e| Error::invalid(path.display().to_string(), format!("not JSON: {e}")))?;
     Ok((json, scenario))
 }
 
@@ -175,18 +173,23 @@ pub fn with_horizon(json: &Value, duration: f64, flag: &str) -> Result<(Value, S
     Ok((v, s))
 }
 
-/// Runs the work-precision study of the scenario file `path` and writes its outputs
-/// into `out`.
-pub fn tradeoff(path: &Path, out: &Path, options: Options) -> Result<Study> {
-    let (json, scenario) = load_json(path)?;
+/// Runs the work-precision study of the scenario file `path` (with the `--set`
+/// overrides `sets` applied) and writes its outputs into `out`.
+pub fn tradeoff(path: &Path, sets: &[String], out: &Path, options: Options) -> Result<Study> {
+    let (json, scenario) = load_json(path, sets)?;
     let study = study(&json, &scenario, options)?;
     write::write_study(out, &study)?;
     Ok(study)
 }
 
 /// `dsmcosim tradeoff`: runs the study, writes it, prints a one-line summary.
-pub fn command_tradeoff(path: &Path, out: &Path, duration: Option<f64>) -> Result<()> {
-    let study = tradeoff(path, out, Options { duration })?;
+pub fn command_tradeoff(
+    path: &Path,
+    sets: &[String],
+    out: &Path,
+    duration: Option<f64>,
+) -> Result<()> {
+    let study = tradeoff(path, sets, out, Options { duration })?;
     let count = |f: &dyn Fn(&Status) -> bool| {
         study
             .variants
@@ -209,8 +212,13 @@ pub fn command_tradeoff(path: &Path, out: &Path, duration: Option<f64>) -> Resul
 }
 
 /// `dsmcosim stability-map`: runs the map, writes it, prints a one-line summary.
-pub fn command_stability_map(path: &Path, out: &Path, duration: Option<f64>) -> Result<()> {
-    let map = stability_map(path, out, duration)?;
+pub fn command_stability_map(
+    path: &Path,
+    sets: &[String],
+    out: &Path,
+    duration: Option<f64>,
+) -> Result<()> {
+    let map = stability_map(path, sets, out, duration)?;
     let count = |o: u8| map.cells.iter().filter(|c| c.outcome == Some(o)).count();
     crate::console::say(format_args!(
         "{}: {} cells over {} s: {} within ε, {} beyond ε, {} diverged",

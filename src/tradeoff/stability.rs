@@ -82,8 +82,13 @@ impl Observer for Count<'_> {
 
 /// Runs the map of the scenario file `path` (optionally over `duration` seconds instead
 /// of the scenario's duration) and writes it into `out`.
-pub fn stability_map(path: &Path, out: &Path, duration: Option<f64>) -> Result<StabilityMap> {
-    let (json, scenario) = super::load_json(path)?;
+pub fn stability_map(
+    path: &Path,
+    sets: &[String],
+    out: &Path,
+    duration: Option<f64>,
+) -> Result<StabilityMap> {
+    let (json, scenario) = super::load_json(path, sets)?;
     let Stabilizer::Smc { k, epsilon, .. } = scenario.stabilizer else {
         return Err(Error::invalid(
             "stabilizer",

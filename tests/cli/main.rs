@@ -8,6 +8,7 @@ use serde_json::{json, Value};
 mod boundary_layer;
 mod check;
 mod contract;
+mod conventions;
 mod corpus;
 mod limits;
 mod outputs;

@@ -477,9 +477,14 @@ fn the_coupling_study_measures_a_force_free_mechanism_from_its_start() {
     let out = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("target/test-scratch/coupling_ring");
     let _ = std::fs::remove_dir_all(&out);
-    let cells =
-        dsmcosim::coupling_study::study(&dir.join("ring12.json"), &out, Some(1.5), &mut |_, _| {})
-            .expect("study");
+    let cells = dsmcosim::coupling_study::study(
+        &dir.join("ring12.json"),
+        &[],
+        &out,
+        Some(1.5),
+        &mut |_, _| {},
+    )
+    .expect("study");
     let bounded: Vec<_> = cells.iter().filter(|c| c.bounded()).collect();
     assert!(
         bounded.len() > cells.len() / 2,

@@ -1,0 +1,145 @@
+//! The conventions users of cargo, ripgrep, OMNeT++ or ns-3 expect: `--version` with the
+//! commit and compiler, `-o` for `--out`, `-j` for threads (the same bits at any
+//! count), `-q` and `-v`, shell completions and man pages generated from the command
+//! line's definition, and `--set` on every command that reads a scenario.
+
+use serde_json::json;
+
+use super::{repo, run, said, scratch, shipped, summary, write_json};
+
+#[test]
+fn version_names_the_commit_and_the_compiler() {
+    let o = run(&["--version"]);
+    assert!(o.status.success(), "{}", said(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.starts_with("dsmcosim "), "{text}");
+    assert!(
+        text.contains("(commit ") && text.contains("rustc"),
+        "{text}"
+    );
+}
+
+#[test]
+fn short_flags_quiet_verbose_and_jobs() {
+    let dir = scratch("conventions_flags");
+    let mut v = shipped("grid16_space_fixed");
+    v["duration"] = json!(1.0);
+    let file = write_json(&dir, "s.json", &v);
+    let f = file.to_str().unwrap();
+    let out = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    // -o, -q: the run writes its files and prints nothing.
+    let q = run(&["-q", "run", f, "-o", &out("quiet")]);
+    assert!(q.status.success(), "{}", said(&q));
+    assert!(q.stdout.is_empty(), "{}", said(&q));
+    // -v: the plan first (what validate prints), then the usual lines.
+    let verbose = run(&["run", f, "-o", &out("verbose"), "-v"]);
+    assert!(verbose.status.success(), "{}", said(&verbose));
+    let text = String::from_utf8_lossy(&verbose.stdout);
+    assert!(text.contains("node 1") && text.contains("digest"), "{text}");
+    // -j: one thread and two give the same digest as the default.
+    let one = run(&["run", f, "-o", &out("j1"), "-j", "1"]);
+    let two = run(&["-j", "2", "run", f, "-o", &out("j2")]);
+    assert!(
+        one.status.success() && two.status.success(),
+        "{}",
+        said(&one)
+    );
+    let digest = |d: &str| summary(&dir.join(d))["digest"].clone();
+    assert_eq!(digest("j1"), digest("quiet"));
+    assert_eq!(digest("j2"), digest("quiet"));
+    assert_eq!(digest("verbose"), digest("quiet"));
+    // -q and -v together are refused as clap refuses conflicting flags.
+    let both = run(&["-q", "-v", "run", f, "-o", &out("both")]);
+    assert_eq!(both.status.code(), Some(2), "{}", said(&both));
+    let zero = run(&["-j", "0", "run", f, "-o", &out("j0")]);
+    assert_eq!(zero.status.code(), Some(2), "{}", said(&zero));
+}
+
+#[test]
+fn completions_and_man_pages_come_from_the_definition() {
+    for (shell, marker) in [
+        ("bash", "_dsmcosim()"),
+        ("zsh", "#compdef dsmcosim"),
+        ("fish", "complete -c dsmcosim"),
+    ] {
+        let o = run(&["completions", shell]);
+        assert!(o.status.success(), "{shell}: {}", said(&o));
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(text.contains(marker), "{shell}: no `{marker}`");
+        for sub in ["validate", "run", "coupling", "sweep"] {
+            assert!(text.contains(sub), "{shell}: completes `{sub}`");
+        }
+    }
+    let dir = scratch("conventions_man");
+    let o = run(&["man", "-o", dir.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", said(&o));
+    for page in [
+        "dsmcosim.1",
+        "dsmcosim-run.1",
+        "dsmcosim-coupling.1",
+        "dsmcosim-man.1",
+    ] {
+        let text =
+            std::fs::read_to_string(dir.join(page)).unwrap_or_else(|e| panic!("{page}: {e}"));
+        assert!(text.contains(".TH"), "{page} is a man page");
+    }
+    let run_page = std::fs::read_to_string(dir.join("dsmcosim-run.1")).unwrap();
+    assert!(
+        run_page.contains("checkpoint"),
+        "the run page carries its options"
+    );
+}
+
+#[test]
+fn every_command_that_reads_a_scenario_takes_set() {
+    // The override is applied before the study checks the scenario: dropping the
+    // partition makes the coupling study refuse it, naming `partition`; a bad pointer
+    // is refused naming the override, on each study command; nothing is written.
+    let dir = scratch("conventions_set");
+    let ring = repo().join("scenarios/mechanisms/ring12.json");
+    let ring = ring.to_str().unwrap();
+    let out = dir.join("out");
+    let o = run(&[
+        "coupling",
+        ring,
+        "--set",
+        "/partition=null",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", said(&o));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("partition"),
+        "{}",
+        said(&o)
+    );
+    for command in ["coupling", "tradeoff", "stability-map"] {
+        let o = run(&[
+            command,
+            ring,
+            "--set",
+            "/nowhere/deep=1",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(o.status.code(), Some(2), "{command}: {}", said(&o));
+        assert!(
+            String::from_utf8_lossy(&o.stderr).contains("--set /nowhere/deep=1"),
+            "{command}: {}",
+            said(&o)
+        );
+    }
+    assert!(!out.exists(), "nothing written");
+    // And a good override changes what runs: the study of a 1.2-s ring.
+    let o = run(&[
+        "coupling",
+        ring,
+        "--set",
+        "/duration=1.2",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", said(&o));
+    let md = std::fs::read_to_string(out.join("coupling.md")).unwrap();
+    assert!(md.contains("ring12"), "{md}");
+}
