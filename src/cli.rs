@@ -519,10 +519,50 @@ fn report(name: &str, outcome: &crate::run::Outcome, out: &std::path::Path) {
 /// Whether `path` holds a sweep file (a JSON object with `axes` and `base`) rather than
 /// a scenario; anything unreadable is left to the scenario loader to report.
 fn is_sweep(path: &std::path::Path) -> bool {
-    crate::input::read_text(path)
+    file_kind(path) == Some(FileKind::Sweep)
+}
+
+/// Which kind of file a JSON object is, by its required keys.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum FileKind {
+    /// `base` and `axes`.
+    Sweep,
+    /// `model` and `duration`.
+    Scenario,
+}
+
+/// The kind of the JSON file at `path`, if it is readable JSON of either kind.
+fn file_kind(path: &std::path::Path) -> Option<FileKind> {
+    let v = crate::input::read_text(path)
         .ok()
-        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
-        .is_some_and(|v| v.get("axes").is_some() && v.get("base").is_some())
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())?;
+    if v.get("axes").is_some() && v.get("base").is_some() {
+        Some(FileKind::Sweep)
+    } else if v.get("model").is_some() && v.get("duration").is_some() {
+        Some(FileKind::Scenario)
+    } else {
+        None
+    }
+}
+
+/// Refuses a file of the other kind than `command` reads, saying which command reads it.
+fn expect_kind(path: &std::path::Path, wanted: FileKind, command: &str) -> crate::Result<()> {
+    let found = file_kind(path);
+    let hint = match (wanted, found) {
+        (FileKind::Scenario, Some(FileKind::Sweep)) => format!(
+            "is a sweep file (it has `base` and `axes`), not a scenario: run its points with              `dsmcosim sweep {} -o DIR`",
+            path.display()
+        ),
+        (FileKind::Sweep, Some(FileKind::Scenario)) => format!(
+            "is a scenario file (it has `model` and `duration`), not a sweep: run it with              `dsmcosim run {} -o DIR`",
+            path.display()
+        ),
+        _ => return Ok(()),
+    };
+    Err(crate::Error::invalid(
+        path.display().to_string(),
+        format!("{hint} (`{command}` reads the other kind)"),
+    ))
 }
 
 /// Writes a report file atomically, creating its directory.
@@ -587,6 +627,8 @@ pub fn execute(command: Command) -> crate::Result<()> {
             checkpoint_every,
         } => {
             let options = run_options(checkpoint_every, force, limits)?;
+            expect_kind(&scenario, FileKind::Scenario, "run")?;
+            crate::interrupt::install();
             let (s, text) = scenario::load_with(&scenario, &sets)?;
             if VERBOSE.load(std::sync::atomic::Ordering::Relaxed) {
                 let plan = crate::run::plan::plan(&s)?;
@@ -610,6 +652,7 @@ pub fn execute(command: Command) -> crate::Result<()> {
             checkpoint_every,
         } => {
             let options = run_options(checkpoint_every, force, limits)?;
+            crate::interrupt::install();
             let outcome = crate::run::resume(&checkpoint, &out, options)?;
             report(&checkpoint.display().to_string(), &outcome, &out);
             Ok(())
@@ -740,6 +783,7 @@ pub fn execute(command: Command) -> crate::Result<()> {
             shard,
             keep,
         } => {
+            expect_kind(&sweep, FileKind::Sweep, "sweep")?;
             let shard = shard
                 .as_deref()
                 .map(crate::sweep::Shard::parse)

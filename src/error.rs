@@ -51,6 +51,22 @@ pub enum Error {
     /// first differing record.
     #[error("{0}")]
     Mismatch(String),
+    /// The run was stopped by Ctrl-C or SIGTERM at `at` (its outputs up to there are
+    /// written, marked interrupted).
+    #[error(
+        "interrupted at t = {} s of {} s: the outputs up to there are written and marked \
+         \"status\": \"interrupted\" in summary.json; {hint}",
+        at.as_secs_f64(),
+        end.as_secs_f64()
+    )]
+    Interrupted {
+        /// Simulated time reached.
+        at: crate::kernel::SimTime,
+        /// The run's end.
+        end: crate::kernel::SimTime,
+        /// How to continue instead of starting over.
+        hint: String,
+    },
     /// `dsmcosim check` of several scenarios: not all match. `message` counts the
     /// outcomes; `code` is the exit code their precedence gives
     /// ([`crate::check::batch::Batch::exit_code`]).
@@ -131,6 +147,7 @@ impl Error {
             Error::Io { .. } => 1,
             Error::Mismatch(_) => 4,
             Error::Checks { code, .. } => *code,
+            Error::Interrupted { .. } => 130,
         }
     }
 }

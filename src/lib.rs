@@ -62,6 +62,7 @@ pub mod coupling_study;
 pub mod distance;
 pub mod error;
 pub mod input;
+pub mod interrupt;
 pub mod kernel;
 pub mod multibody;
 pub mod network;

@@ -152,6 +152,26 @@ pub fn create_dir_all(path: &Path) -> Result<()> {
     std::fs::create_dir_all(path).map_err(|e| Error::io(path, e))
 }
 
+/// [`create_dir_all`] for a directory the user named (`--out`): a file where the
+/// directory should be is a mistaken argument (`--out README.md`), not an I/O failure,
+/// so it is refused saying so (exit 2) and left alone.
+pub fn create_out_dir(path: &Path) -> Result<()> {
+    if let Some(file) = path
+        .ancestors()
+        .find(|p| !p.as_os_str().is_empty() && p.exists() && !p.is_dir())
+    {
+        return Err(Error::invalid(
+            path.display().to_string(),
+            format!(
+                "{} is a file, not a directory: outputs go into a directory (created if \
+                 missing), e.g. `-o runs/NAME`",
+                file.display()
+            ),
+        ));
+    }
+    create_dir_all(path)
+}
+
 /// A buffered file that appears at its path only when [`AtomicFile::commit`] succeeds.
 ///
 /// For large streamed outputs such as `trace.csv`. Dropping it without a commit (an

@@ -235,9 +235,11 @@ fn drive(
                     t = SimTime(t.0.saturating_add(slice.0)).min(target);
                     world.advance_to(t, recorder)?;
                     progress.tick(world.steps_done());
+                    interrupted(out, t, end, every)?;
                 }
             }
         }
+        interrupted(out, t, end, every)?;
         if let (Some(e), Some(cp)) = (every, next_cp) {
             if t < end {
                 crate::checkpoint::write(out, t, world, recorder, controller.as_deref())?;
@@ -248,6 +250,26 @@ fn drive(
     world.run_to_end(recorder)?;
     progress.finish();
     Ok(())
+}
+
+/// The error of a run stopped by Ctrl-C or SIGTERM at `t` (see [`crate::interrupt`]),
+/// with the way to continue: the last checkpoint when the run writes them, else the
+/// option that makes it write them.
+fn interrupted(out: &Path, t: SimTime, end: SimTime, every: Option<SimTime>) -> Result<()> {
+    if !crate::interrupt::requested() || t >= end {
+        return Ok(());
+    }
+    let hint = match every {
+        Some(_) => format!(
+            "continue from the last checkpoint with `dsmcosim resume {}/checkpoints/t_….ckpt -o {}`",
+            out.display(),
+            out.display()
+        ),
+        None => "a rerun starts from t = 0; `--checkpoint-every S` writes checkpoints that \
+                 `dsmcosim resume` continues from"
+            .to_string(),
+    };
+    Err(Error::Interrupted { at: t, end, hint })
 }
 
 fn write_epochs(out: &Path, world: &CoSim, exp: &Experiment) -> Result<()> {
@@ -399,6 +421,7 @@ fn write_summary(out: &Path, run: &Ran) -> Result<()> {
         "status": match failure {
             None => "ok",
             Some(Error::Diverged(_) | Error::Numerical { .. }) => "diverged",
+            Some(Error::Interrupted { .. }) => "interrupted",
             Some(_) => "failed",
         },
         "error": error,

@@ -151,10 +151,18 @@ impl Batch {
         if self.outcomes.len() == 1 {
             let o = self.outcomes.remove(0);
             let status = o.status();
+            // A missing stored run: the error, then the command that stores one.
+            let hint = (status == Status::Missing).then(|| {
+                format!(
+                    "store one with `dsmcosim run {} -o {}`",
+                    o.scenario.display(),
+                    o.stored.display()
+                )
+            });
             return match (o.result, status) {
                 (Ok(r), Status::Mismatch) => (vec![], Err(Error::Mismatch(r.message()))),
                 (Ok(r), _) => (vec![r.message()], Ok(())),
-                (Err(e), _) => (vec![], Err(e)),
+                (Err(e), _) => (hint.into_iter().collect(), Err(e)),
             };
         }
         let mut lines: Vec<String> = self.outcomes.iter().map(Outcome::text).collect();

@@ -103,7 +103,12 @@ impl Outcome {
     pub fn text(&self) -> String {
         match (&self.result, self.status()) {
             (Ok(r), _) => r.message(),
-            (Err(e), Status::Missing) => format!("{}: no stored run: {e}", self.name),
+            (Err(e), Status::Missing) => format!(
+                "{}: no stored run: {e} (store one with `dsmcosim run {} -o {}`)",
+                self.name,
+                self.scenario.display(),
+                self.stored.display()
+            ),
             (Err(e), _) => format!("{} ({}): {e}", self.name, self.scenario.display()),
         }
     }

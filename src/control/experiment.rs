@@ -393,6 +393,10 @@ impl Controller {
             progress.tick(exp.windows.len() as u64);
             t = t_end;
             self.next = t;
+            // Ctrl-C under `run`: stop at this window's end; the caller reports it.
+            if crate::interrupt::requested() {
+                break;
+            }
         }
         progress.finish();
         Ok(())

@@ -218,7 +218,7 @@ pub fn lock(dir: &Path, name: &str, what: &str) -> Result<File> {
 /// run writes is taken by something else than a regular file, or by a file in a
 /// directory that holds no run (exit 2, naming `--out` or the path).
 pub fn claim(dir: &Path, scenario: &str, force: bool) -> Result<RunDir> {
-    super::create_dir_all(dir)?;
+    super::create_out_dir(dir)?;
     let had_run = holds_run(dir);
     let lock = lock(dir, LOCK_FILE, "dsmcosim run")?;
     let other = stored_scenario(dir).filter(|s| s != scenario);

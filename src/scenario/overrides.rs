@@ -54,8 +54,49 @@ pub fn load_with(path: &Path, sets: &[String]) -> Result<(Scenario, String)> {
         serde_json::to_string_pretty(&doc).map_err(|e| Error::invalid("--set", e.to_string()))?;
     text.push('\n');
     let label = format!("{} with --set", path.display());
-    let scenario = super::parse_str(&text, &label)?;
+    let scenario = super::parse_str(&text, &label).map_err(|e| locate(e, sets))?;
     Ok((scenario, text))
+}
+
+/// An error in the overridden scenario, told against what the user wrote: a line and
+/// column would point into the rewritten JSON, which the user never saw, so they give
+/// way to the override that set the field (or, for a field no override set, to a note
+/// that the overrides were applied).
+fn locate(e: Error, sets: &[String]) -> Error {
+    let Error::Invalid { path, message } = e else {
+        return e;
+    };
+    let message = match message.rfind(" (line ") {
+        Some(at) if message.ends_with(')') => message[..at].to_string(),
+        _ => message,
+    };
+    let set_here = sets.iter().rev().find(|set| {
+        set.split_once('=')
+            .is_some_and(|(pointer, _)| pointer_as_path(pointer) == path)
+    });
+    let message = match set_here {
+        Some(set) => format!("{message} (set by `--set {set}`)"),
+        None => format!("{message} (in the file with the --set overrides applied)"),
+    };
+    Error::Invalid { path, message }
+}
+
+/// A JSON pointer written as the dotted path errors name fields by: `/channels/0/tau`
+/// is `channels[0].tau`.
+fn pointer_as_path(pointer: &str) -> String {
+    let mut path = String::new();
+    for part in pointer.split('/').skip(1) {
+        let part = part.replace("~1", "/").replace("~0", "~");
+        if part.parse::<usize>().is_ok() {
+            path.push_str(&format!("[{part}]"));
+        } else {
+            if !path.is_empty() {
+                path.push('.');
+            }
+            path.push_str(&part);
+        }
+    }
+    path
 }
 
 /// Applies one `POINTER=VALUE` to `doc`; errors name `--set` and the override.
@@ -74,6 +115,16 @@ pub fn apply(doc: &mut Value, set: &str) -> Result<()> {
 mod tests {
     use super::*;
     use serde_json::json;
+
+    #[test]
+    fn a_pointer_reads_as_the_path_errors_name() {
+        assert_eq!(pointer_as_path("/channels/0/tau"), "channels[0].tau");
+        assert_eq!(pointer_as_path("/integrator"), "integrator");
+        assert_eq!(
+            pointer_as_path("/model/bodies/3/mass"),
+            "model.bodies[3].mass"
+        );
+    }
 
     #[test]
     fn values_are_json_or_else_text() {

@@ -115,7 +115,10 @@ fn serde_error(err: &serde_json::Error, path: &str, file_label: &str, text: &str
     match err.classify() {
         Category::Data => Error::Invalid {
             path: path.unwrap_or_else(|| "top level".to_string()),
-            message: format!("{message} (line {line}, column {column})"),
+            message: format!(
+                "{} (line {line}, column {column})",
+                with_suggestion(&message)
+            ),
         },
         Category::Syntax | Category::Eof | Category::Io => {
             let token = token_at(text, line, column);
@@ -139,6 +142,38 @@ fn serde_error(err: &serde_json::Error, path: &str, file_label: &str, text: &str
                 column,
             }
         }
+    }
+}
+
+/// serde's "unknown field `x`, expected one of `a`, `b`, …" (or "unknown variant")
+/// with the listing replaced by the nearest name when one is close, as cargo does for a
+/// mistyped subcommand: "unknown field `intergrator`; did you mean `integrator`?". A
+/// name is close when at most a third of its letters (at least one) differ; with no
+/// close name the full listing stays.
+pub fn with_suggestion(message: &str) -> String {
+    let unknown = ["unknown field `", "unknown variant `"]
+        .iter()
+        .find_map(|p| {
+            message
+                .strip_prefix(p)
+                .map(|rest| (&p[..p.len() - 2], rest))
+        });
+    let Some((what, rest)) = unknown else {
+        return message.to_string();
+    };
+    let Some((name, listing)) = rest.split_once('`') else {
+        return message.to_string();
+    };
+    let candidates: Vec<&str> = listing.split('`').skip(1).step_by(2).collect();
+    let nearest = candidates
+        .iter()
+        .map(|c| (strsim::damerau_levenshtein(name, c), *c))
+        .min();
+    match nearest {
+        Some((d, c)) if d <= (c.chars().count() / 3).max(1) => {
+            format!("{what} `{name}`; did you mean `{c}`?")
+        }
+        _ => message.to_string(),
     }
 }
 
@@ -594,6 +629,24 @@ fn output(o: &OutputFile, ids: &Ids, body_count: usize) -> Result<OutputSpec> {
 
 #[cfg(test)]
 mod tests {
+    /// A mistyped key or variant names the nearest valid one instead of listing all;
+    /// nothing close keeps the listing.
+    #[test]
+    fn a_mistyped_name_gets_the_nearest_valid_one() {
+        let e = super::with_suggestion(
+            "unknown field `intergrator`, expected one of `name`, `seed`, `integrator`, `dt`",
+        );
+        assert_eq!(e, "unknown field `intergrator`; did you mean `integrator`?");
+        let e = super::with_suggestion(
+            "unknown variant `rk5`, expected one of `euler`, `symplectic_euler`, `rk4`",
+        );
+        assert_eq!(e, "unknown variant `rk5`; did you mean `rk4`?");
+        let far = "unknown field `zzzzzz`, expected one of `name`, `seed`";
+        assert_eq!(super::with_suggestion(far), far);
+        let other = "invalid type: string \"a\", expected f64";
+        assert_eq!(super::with_suggestion(other), other);
+    }
+
     use nalgebra::{UnitQuaternion, Vector3};
 
     use super::*;

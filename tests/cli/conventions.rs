@@ -143,3 +143,129 @@ fn every_command_that_reads_a_scenario_takes_set() {
     let md = std::fs::read_to_string(out.join("coupling.md")).unwrap();
     assert!(md.contains("ring12"), "{md}");
 }
+
+#[test]
+fn a_file_of_the_other_kind_or_a_mistyped_key_gets_a_pointer_to_the_fix() {
+    let dir = scratch("conventions_messages");
+    let sweep = repo().join("scenarios/sweeps/tdma4_slot_layouts.json");
+    let scenario = repo().join("scenarios/grid16_space_fixed.json");
+    let out = dir.join("out");
+    let o = run(&["run", sweep.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2), "{}", said(&o));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("dsmcosim sweep"),
+        "{}",
+        said(&o)
+    );
+    let o = run(&[
+        "sweep",
+        scenario.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", said(&o));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("dsmcosim run"),
+        "{}",
+        said(&o)
+    );
+    assert!(!out.exists(), "nothing written");
+    let mut v = shipped("grid16_space_fixed");
+    let dt = v["dt"].take();
+    v.as_object_mut().unwrap().remove("dt");
+    v["dtt"] = dt;
+    let file = write_json(&dir, "typo.json", &v);
+    let o = run(&["validate", file.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2), "{}", said(&o));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("`dtt`; did you mean `dt`?"), "{e}");
+    // An output "directory" that is a file: exit 2, saying so, the file untouched.
+    let notes = dir.join("notes.md");
+    std::fs::write(&notes, "mine").unwrap();
+    let o = run(&[
+        "run",
+        scenario.to_str().unwrap(),
+        "-o",
+        notes.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", said(&o));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("is a file, not a directory"),
+        "{}",
+        said(&o)
+    );
+    assert_eq!(std::fs::read_to_string(&notes).unwrap(), "mine");
+    // A missing stored run: the command that stores it.
+    let refs = dir.join("refs");
+    std::fs::create_dir_all(&refs).unwrap();
+    let o = run(&[
+        "check",
+        scenario.to_str().unwrap(),
+        "--against",
+        refs.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", said(&o));
+    let both = format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(both.contains("store one with `dsmcosim run"), "{both}");
+}
+
+#[test]
+fn ctrl_c_stops_a_run_cleanly_and_says_how_to_continue() {
+    // A run of 3000 s of simulated time (about a minute of wall time): SIGINT once it
+    // has claimed its directory. It stops at the end of its slice, writes what it has
+    // (summary.json "interrupted", no temporary file left), exits 130 and names the
+    // option that makes a run resumable. Guarded against a hang only (300 s).
+    let dir = scratch("conventions_ctrl_c");
+    let out = dir.join("out");
+    let scenario = repo().join("scenarios/grid16_monolithic.json");
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_dsmcosim"))
+        .args([
+            "run",
+            scenario.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--set",
+            "/duration=3000",
+            "--set",
+            "/output/decimation=10000",
+        ])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    let start = std::time::Instant::now();
+    while !out.join("trace.csv").exists() && !has_temporary(&out) {
+        assert!(start.elapsed().as_secs() < 300, "the run never started");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    // SAFETY: kill(2) on the child's pid, which has not been waited for.
+    let rc = unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGINT) };
+    assert_eq!(rc, 0);
+    let o = child.wait_with_output().expect("wait");
+    assert_eq!(o.status.code(), Some(130), "{}", said(&o));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("interrupted at t = ") && e.contains("--checkpoint-every"),
+        "{e}"
+    );
+    assert_eq!(summary(&out)["status"], json!("interrupted"));
+    assert!(
+        !has_temporary(&out),
+        "a temporary file was left in {}",
+        out.display()
+    );
+}
+
+/// Whether `dir` holds a temporary file of an atomic write (`.NAME.tmp…`).
+fn has_temporary(dir: &std::path::Path) -> bool {
+    std::fs::read_dir(dir).is_ok_and(|entries| {
+        entries
+            .filter_map(|e| e.ok())
+            .any(|e| e.file_name().to_string_lossy().contains(".tmp"))
+    })
+}

@@ -53,7 +53,10 @@ fn a_bad_override_exits_2_naming_it_and_writes_nothing() {
     let dir = scratch("overrides_bad");
     let base = write_json(&dir, "base.json", &short_grid());
     for (set, want) in [
-        ("/integrator=rk5", "integrator: unknown variant `rk5`"),
+        (
+            "/integrator=rk5",
+            "integrator: unknown variant `rk5`; did you mean `rk4`? (set by `--set /integrator=rk5`)",
+        ),
         ("/dt=-1", "dt"),
         (
             "/nope/x=1",

@@ -1,0 +1,28 @@
+//! Ctrl-C (SIGINT) and SIGTERM during `run` and `resume`: the run stops at the end of
+//! its current slice of steps (or controller window), writes what it has — the trace
+//! up to there, summary.json with `"status": "interrupted"` — and exits 130 saying so
+//! and how a long run can be continued instead (`--checkpoint-every`, `resume`).
+//! Without this a Ctrl-C killed the process mid-write, left a `.trace.csv.tmp.*` file
+//! until the next run and said nothing. A second Ctrl-C exits at once (130).
+//!
+//! Only `run` and `resume` install the handler; every other command keeps the default
+//! (the process ends at once), which `sweep --resume` relies on: an interrupted sweep
+//! point must not look finished.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+
+static REQUESTED: AtomicBool = AtomicBool::new(false);
+
+/// Installs the handler (once per process; a failure to install leaves the default).
+pub fn install() {
+    let _ = ctrlc::set_handler(|| {
+        if REQUESTED.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+    });
+}
+
+/// Whether a stop was asked for.
+pub fn requested() -> bool {
+    REQUESTED.load(Ordering::Relaxed)
+}
