@@ -430,10 +430,13 @@ pub fn execute(command: Command) -> crate::Result<()> {
                     eprintln!("warning: {w}");
                 }
                 say!(
-                    "{}: ok — sweep {} of {} points, each validated; {} with a channel never served",
+                    "{}: ok — sweep {} of {} points, {} of them validated (each axis value, \
+                     the extreme combinations; `sweep` checks every point before it runs); \
+                     {} with a channel never served",
                     scenario.display(),
                     c.name,
                     c.points,
+                    c.checked,
                     c.warnings.len()
                 );
                 return Ok(());
