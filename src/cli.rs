@@ -436,18 +436,28 @@ pub struct LimitArgs {
     /// Most checkpoints the run may write.
     #[arg(long, value_name = "N", default_value_t = crate::run::budget::DEFAULT_MAX_CHECKPOINTS)]
     max_checkpoints: u64,
-    /// Most bytes of memory the run may need (estimated before the run).
-    #[arg(long, value_name = "BYTES", default_value_t = crate::run::budget::DEFAULT_MAX_MEMORY_BYTES)]
-    max_memory: u64,
+    /// Most bytes of memory the run may need (estimated before the run) [default: the
+    /// smallest of 16000000000, the address-space limit (ulimit -v) and the cgroup's
+    /// memory limit].
+    #[arg(long, value_name = "BYTES")]
+    max_memory: Option<u64>,
 }
 
 impl LimitArgs {
     fn limits(&self) -> crate::run::budget::Limits {
-        crate::run::budget::Limits {
+        let limits = crate::run::budget::Limits {
             max_steps: self.max_steps,
             max_output_bytes: self.max_output,
             max_checkpoints: self.max_checkpoints,
-            max_memory_bytes: self.max_memory,
+            ..crate::run::budget::Limits::default()
+        };
+        match self.max_memory {
+            Some(bytes) => crate::run::budget::Limits {
+                max_memory_bytes: bytes,
+                max_memory_from: crate::run::budget::MemoryLimitFrom::Flag,
+                ..limits
+            },
+            None => limits,
         }
     }
 }
@@ -594,10 +604,13 @@ pub fn execute(command: Command) -> crate::Result<()> {
                     eprintln!("warning: {w}");
                 }
                 say!(
-                    "{}: ok — sweep {} of {} points, each validated; {} with a channel never served",
+                    "{}: ok — sweep {} of {} points, {} of them validated (each axis value, \
+                     the extreme combinations; `sweep` checks every point before it runs); \
+                     {} with a channel never served",
                     scenario.display(),
                     c.name,
                     c.points,
+                    c.checked,
                     c.warnings.len()
                 );
                 return Ok(());

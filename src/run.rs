@@ -488,13 +488,23 @@ fn write_summary(out: &Path, run: &Ran) -> Result<()> {
 /// serialized as JSON), so two summaries with the same hash ran the same scenario.
 fn provenance(scenario: &Scenario) -> serde_json::Value {
     let non_empty = |s: &'static str| (!s.is_empty()).then_some(s);
-    let model = serde_json::to_vec(scenario).unwrap_or_default();
+    // Streamed into the hash: the JSON text of a million-body model is about 0.8 GB,
+    // which a `to_vec` held on top of the whole world at the run's end (its peak).
+    let mut hasher = blake3::Hasher::new();
+    let streamed = {
+        let mut w = std::io::BufWriter::with_capacity(1 << 16, &mut hasher);
+        serde_json::to_writer(&mut w, scenario).is_ok() && std::io::Write::flush(&mut w).is_ok()
+    };
+    if !streamed {
+        // As `to_vec(..).unwrap_or_default()` did: the hash of nothing.
+        hasher.reset();
+    }
     json!({
         "tool": "dsmcosim",
         "version": env!("CARGO_PKG_VERSION"),
         "git_commit": non_empty(env!("DSMCOSIM_GIT_COMMIT")),
         "rustc": non_empty(env!("DSMCOSIM_RUSTC")),
-        "scenario_blake3": blake3::hash(&model).to_hex().to_string(),
+        "scenario_blake3": hasher.finalize().to_hex().to_string(),
     })
 }
 

@@ -32,8 +32,9 @@
 //! `seed` after the overrides; `key` is [`points::Plan::seed_key`], BLAKE3 of the
 //! point's configuration and repetition, never its index), the axis values, and `name`
 //! = `<sweep name>_<key as 16 hex digits>`. An axis on `/seed` sets the seed itself.
-//! `repeat: n` runs every configuration `n` times (a `rep` column). Every point is
-//! built and validated before any runs; a bad sweep file or point is an
+//! `repeat: n` runs every configuration `n` times (a `rep` column). `sweep` builds and
+//! validates every point before any runs (`validate` a bounded set of them:
+//! [`points::checked_points`]); a bad sweep file or point is an
 //! [`Error::Invalid`](crate::Error::Invalid) (exit code 2) naming the axis
 //! (`axes[1].pointer: …`) or the point with its axis values (`point p3 (drift = 50,
 //! tau1 = 0.004): dt: …`), and nothing is written.

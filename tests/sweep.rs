@@ -690,6 +690,71 @@ fn validate_warns_about_a_slot_list_that_never_serves_a_channel() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// `validate` on a sweep checks the definition, each axis's values and the extreme
+/// combinations, not every point (issue "Hardening"): what is asserted is the number of
+/// point scenarios it builds and validates, not a time.
+#[test]
+fn validate_checks_each_value_and_the_extremes_not_every_point() {
+    let dir = scratch("validate-bounded");
+    let omega = |steps: u64| {
+        json!({"name": "omega", "pointer": "/forces/0/omega",
+               "range": {"from": 1.0, "to": 3.0, "steps": steps}})
+    };
+    // A 100 000-step range alone: 1 000 of its values, both ends among them.
+    let path = write_sweep(
+        &dir,
+        "long.json",
+        &json!({"name": "long", "base": "base.json", "axes": [omega(100_000)]}),
+    );
+    let c = dsmcosim::sweep::check(&path).unwrap();
+    assert_eq!(c.points, 100_000);
+    assert_eq!(c.checked, dsmcosim::sweep::points::CHECKED_VALUES_PER_AXIS);
+    let plan =
+        dsmcosim::sweep::points::plan(&dsmcosim::sweep::file::load(&path).unwrap().0).unwrap();
+    let picked = dsmcosim::sweep::points::checked_points(&plan);
+    assert_eq!(
+        (picked[0], *picked.last().unwrap()),
+        (0, 99_999),
+        "both ends"
+    );
+
+    // × two step sizes and 3 repetitions: each value of each axis once with the other
+    // at its first, and the four corners; repetitions are not checked again.
+    let grid = json!({"name": "grid", "base": "base.json", "repeat": 3, "axes": [
+        omega(10_000),
+        {"name": "step", "pointer": "/dt", "values": [0.001, 0.0005]}]});
+    let path = write_sweep(&dir, "grid.json", &grid);
+    let c = dsmcosim::sweep::check(&path).unwrap();
+    assert_eq!(c.points, 60_000);
+    assert!(c.checked <= 1_000 + 2 + 4, "{} points checked", c.checked);
+
+    // A bad value on a short axis is still named with its axis and value, by `validate`
+    // as by `sweep`, in a sweep too big to check whole.
+    let mut bad = grid.clone();
+    bad["axes"][1]["values"] = json!([0.001, "fast"]);
+    let path = write_sweep(&dir, "bad.json", &bad);
+    let e = dsmcosim::sweep::check(&path).unwrap_err().to_string();
+    assert!(
+        e.starts_with("point p3 (omega = 1.0, step = fast, rep = 0): dt:"),
+        "{e}"
+    );
+    // Every value of an axis of up to 1 000 is checked: the middle of a 3-step range
+    // that is no valid delay (0.0015 s) is found though both ends are valid.
+    let path = write_sweep(
+        &dir,
+        "mid.json",
+        &json!({"name": "mid", "base": "base.json", "axes": [
+            {"name": "tau1", "pointer": "/channels/0/tau",
+             "range": {"from": 0.001, "to": 0.002, "steps": 3}}]}),
+    );
+    let e = dsmcosim::sweep::check(&path).unwrap_err().to_string();
+    assert!(
+        e.starts_with("point p1 (tau1 = 0.0015): channels[0].tau"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 mod hostile {
     //! Sweep files legal or not, field by field and together (issue "Hardening"): every
     //! one gets a verdict at once — the points, or an error naming a field — never a
@@ -774,7 +839,12 @@ mod hostile {
             let dir = super::scratch(&format!("hostile-{}", std::thread::current().name().unwrap_or("t").len()));
             let path = super::write_sweep(&dir, "s.json", &sweep);
             match dsmcosim::sweep::check(&path) {
-                Ok(c) => prop_assert!(c.points >= 1 && c.points <= 100_000),
+                // Bounded work: never every point of a long range, at most
+                // 1 000 values per axis (≤ 3 axes) and the ≤ 4·4·4 extreme combinations.
+                Ok(c) => prop_assert!(
+                    c.points >= 1 && c.points <= 100_000 && c.checked <= c.points.min(3 * 1_000 + 64),
+                    "{} points, {} checked", c.points, c.checked
+                ),
                 Err(e) => {
                     let m = e.to_string();
                     prop_assert_eq!(e.exit_code(), 2, "{}", m);

@@ -78,15 +78,20 @@ pub enum SolveError {
 
 /// One contribution to an entry of `A` through a shared body.
 #[derive(Debug, Clone, Copy, serde::Serialize, serde::Deserialize)]
+///
+/// Indices are `u32` (as the CG path's, [`cg`]): a million-body grid has about 10⁷
+/// entries, 32 bytes each instead of 48. A checkpoint stores them as before (postcard
+/// writes `u32` and `usize` as the same varint).
 struct Entry {
-    body: usize,
-    k: usize,
-    l: usize,
+    body: u32,
+    k: u32,
+    l: u32,
+    /// Index into the matrix values (the sparse pattern's slot, or `k·m + l` dense).
+    value: u32,
     /// Product of the two links' signs on the body (+1 for side `a`, −1 for side `b`).
     sign: f64,
     side_k: Side,
     side_l: Side,
-    value: usize,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -302,7 +307,14 @@ impl Exact {
         } else {
             lower_pattern(m, &incident)
         };
-        let mut entries = Vec::new();
+        // Sized exactly: grown by doubling, the vector held up to twice its entries.
+        let mut entries = Vec::with_capacity(
+            incident
+                .iter()
+                .map(|inc| inc.len() * (inc.len() + 1) / 2)
+                .sum(),
+        );
+        let idx = |i: usize| u32::try_from(i).expect("ok: link and body counts fit in u32");
         for (body, inc) in incident.iter().enumerate() {
             for &(k, sk) in inc {
                 for &(l, sl) in inc {
@@ -314,13 +326,13 @@ impl Exact {
                     }
                     let sign = if sk == sl { 1.0 } else { -1.0 };
                     entries.push(Entry {
-                        body,
-                        k,
-                        l,
+                        body: idx(body),
+                        k: idx(k),
+                        l: idx(l),
+                        value: idx(if dense { k * m + l } else { slots[&(l, k)] }),
                         sign,
                         side_k: sk,
                         side_l: sl,
-                        value: if dense { k * m + l } else { slots[&(l, k)] },
                     });
                 }
             }
@@ -350,11 +362,12 @@ impl Exact {
             Side::B => geo.cb[k],
         };
         for e in &self.entries {
-            let mut v = geo.n[e.k].dot(&geo.n[e.l]) * mass.inv_mass[e.body];
+            let (k, l, body) = (e.k as usize, e.l as usize, e.body as usize);
+            let mut v = geo.n[k].dot(&geo.n[l]) * mass.inv_mass[body];
             if rigid {
-                v += c(e.k, e.side_k).dot(&(mass.inv_inertia[e.body] * c(e.l, e.side_l)));
+                v += c(k, e.side_k).dot(&(mass.inv_inertia[body] * c(l, e.side_l)));
             }
-            values[e.value] += e.sign * v;
+            values[e.value as usize] += e.sign * v;
         }
     }
 

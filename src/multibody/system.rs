@@ -155,7 +155,22 @@ impl System {
             omega: vec![v3(); nr],
             z: vec![0.0; nl],
         };
-        let k = std::array::from_fn(|_| Rates::zeros_like(&shape));
+        // Only RK4 uses the stages k2..k4 and the stage state; the Eulers' are left
+        // empty (a quarter of a point-mass body's memory: 4 × 64 bytes per body with
+        // its two links).
+        let rk4 = scenario.integrator == Integrator::Rk4;
+        let k = std::array::from_fn(|i| {
+            if i == 0 || rk4 {
+                Rates::zeros_like(&shape)
+            } else {
+                Rates::zeros_like(&super::state::State::empty())
+            }
+        });
+        let stage = if rk4 {
+            shape
+        } else {
+            super::state::State::empty()
+        };
         System {
             rigid,
             inertia,
@@ -188,7 +203,7 @@ impl System {
             },
             solver,
             k,
-            stage: shape,
+            stage,
             max_violation: scenario.max_violation,
             cg_stalled: 0,
             cg_worst: 0.0,

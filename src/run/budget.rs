@@ -21,20 +21,103 @@ pub const DEFAULT_MAX_STEPS: u64 = 10_000_000_000;
 pub const DEFAULT_MAX_OUTPUT_BYTES: u64 = 10_000_000_000;
 /// Default bound on the checkpoints one run writes (`--max-checkpoints` lifts it).
 pub const DEFAULT_MAX_CHECKPOINTS: u64 = 1_000;
-/// Default bound on the estimated peak memory [bytes] (`--max-memory` lifts it): 16 GB.
+/// Default bound on the estimated peak memory [bytes] (`--max-memory` lifts it): 16 GB,
+/// or less where the process may have less ([`default_max_memory`]).
 pub const DEFAULT_MAX_MEMORY_BYTES: u64 = 16_000_000_000;
 /// Peak resident memory of a run before any body [bytes] (measured: 6.3 MB for a 16×16
-/// grid).
-pub const MEMORY_BASE: u64 = 6_000_000;
-/// Peak resident memory per body [bytes], state, workspaces and the CG solve: the slope
-/// of measured peaks (`/usr/bin/time -f %M`, monolithic grids, CG 10, 10 steps): 16.7 MB
-/// at 64×64, 51.2 MB at 128×128, 186.7 MB at 256×256, i.e. 2.8 kB per body; rounded up.
-pub const MEMORY_PER_BODY: u64 = 3_000;
+/// grid), with room for the allocator's rounding on small scenes.
+pub const MEMORY_BASE: u64 = 10_000_000;
+/// Peak resident memory per body [bytes], state, workspaces, the model and the CG
+/// solve: measured peaks (`/usr/bin/time -f %M`, monolithic point-mass grids, CG 10,
+/// 10 steps; the table in docs/reference.md) less [`MEMORY_BASE`] are 1.8 kB per body
+/// at 64×64, 2.2 kB at 128×128, 2.4 kB at 256×256 and 512×512, 2.2 kB at 1000×1000;
+/// rounded up.
+pub const MEMORY_PER_BODY: u64 = 2_500;
 /// Memory per entry of the exact solve's factor [bytes] (the AMD-ordered sparse
-/// Cholesky's, as its symbolic analysis counts them). Measured peaks above the CG path's
-/// (`/usr/bin/time -f %M`, monolithic grids of point masses, 10 steps), per factor
-/// entry: 25.6 (64×64), 23.3 (128×128), 21.9 (256×256), 17.5 (512×512); rounded up.
-pub const BYTES_PER_FACTOR_ENTRY: u64 = 32;
+/// Cholesky's, as its symbolic analysis counts them). Measured peaks above the CG
+/// path's (same grids and command), per factor entry: 17.4 (64×64), 17.0 (128×128),
+/// 15.7 (256×256), 12.9 (512×512), 12.8 (1000×1000); the small grids' excess is covered
+/// by the margin of [`MEMORY_BASE`] and [`MEMORY_PER_BODY`] (each size's total is
+/// bounded: `estimate_bounds_the_measured_peak` in tests/cli/limits.rs).
+pub const BYTES_PER_FACTOR_ENTRY: u64 = 16;
+
+/// Where a run's memory bound comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MemoryLimitFrom {
+    /// [`DEFAULT_MAX_MEMORY_BYTES`].
+    Default,
+    /// `--max-memory`.
+    Flag,
+    /// The process's address-space limit (`RLIMIT_AS`, `ulimit -v`).
+    AddressSpace,
+    /// The memory limit of the process's cgroup (`memory.max`, v1
+    /// `memory.limit_in_bytes`).
+    Cgroup,
+}
+
+impl MemoryLimitFrom {
+    /// Words for the error message.
+    fn describe(self) -> &'static str {
+        match self {
+            MemoryLimitFrom::Default => "the default limit",
+            MemoryLimitFrom::Flag => "the limit",
+            MemoryLimitFrom::AddressSpace => {
+                "this process's address-space limit (RLIMIT_AS, `ulimit -v`)"
+            }
+            MemoryLimitFrom::Cgroup => "this process's cgroup memory limit",
+        }
+    }
+}
+
+/// A cgroup memory limit file's value [bytes]: `None` for `max` (v2) or a value of
+/// 2⁶² or more (v1's "unlimited" is 2⁶³ − 4096), or anything unreadable.
+pub fn parse_cgroup_limit(text: &str) -> Option<u64> {
+    text.trim().parse::<u64>().ok().filter(|&b| b < 1 << 62)
+}
+
+/// The process's address-space limit [bytes] (`RLIMIT_AS`), if any.
+pub fn address_space_limit() -> Option<u64> {
+    let mut r = libc::rlimit {
+        rlim_cur: 0,
+        rlim_max: 0,
+    };
+    // SAFETY: getrlimit writes one `rlimit` through a valid, exclusive pointer.
+    let ok = unsafe { libc::getrlimit(libc::RLIMIT_AS, &mut r) } == 0;
+    // `rlim_t` is `u64` on 64-bit Linux but not on every target.
+    #[allow(clippy::unnecessary_cast)]
+    let bytes = r.rlim_cur as u64;
+    (ok && r.rlim_cur != libc::RLIM_INFINITY).then_some(bytes)
+}
+
+/// The memory limit of the cgroup the process runs in [bytes], if any: cgroup v2's
+/// `/sys/fs/cgroup/memory.max`, else v1's `/sys/fs/cgroup/memory/memory.limit_in_bytes`
+/// (the files of the cgroup namespace's root, which a container or a batch job sees as
+/// its own).
+pub fn cgroup_limit() -> Option<u64> {
+    [
+        "/sys/fs/cgroup/memory.max",
+        "/sys/fs/cgroup/memory/memory.limit_in_bytes",
+    ]
+    .iter()
+    .find_map(|f| parse_cgroup_limit(&std::fs::read_to_string(f).ok()?))
+}
+
+/// The default memory bound: the smallest of [`DEFAULT_MAX_MEMORY_BYTES`], the
+/// address-space limit and the cgroup limit, and where it comes from. A job on a node
+/// (or in a container) with less memory than a run needs is refused before it starts,
+/// naming the estimate and `--max-memory`, instead of being killed half-way.
+pub fn default_max_memory() -> (u64, MemoryLimitFrom) {
+    let mut best = (DEFAULT_MAX_MEMORY_BYTES, MemoryLimitFrom::Default);
+    for (limit, from) in [
+        (address_space_limit(), MemoryLimitFrom::AddressSpace),
+        (cgroup_limit(), MemoryLimitFrom::Cgroup),
+    ] {
+        if let Some(b) = limit.filter(|&b| b < best.0) {
+            best = (b, from);
+        }
+    }
+    best
+}
 
 /// Limits a run is checked against.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -47,15 +130,21 @@ pub struct Limits {
     pub max_checkpoints: u64,
     /// Most estimated peak memory [bytes].
     pub max_memory_bytes: u64,
+    /// Where `max_memory_bytes` comes from (for the message).
+    pub max_memory_from: MemoryLimitFrom,
 }
 
 impl Default for Limits {
+    /// The default limits; the memory bound is [`default_max_memory`], so it depends on
+    /// the process's address-space and cgroup limits.
     fn default() -> Limits {
+        let (max_memory_bytes, max_memory_from) = default_max_memory();
         Limits {
             max_steps: DEFAULT_MAX_STEPS,
             max_output_bytes: DEFAULT_MAX_OUTPUT_BYTES,
             max_checkpoints: DEFAULT_MAX_CHECKPOINTS,
-            max_memory_bytes: DEFAULT_MAX_MEMORY_BYTES,
+            max_memory_bytes,
+            max_memory_from,
         }
     }
 }
@@ -182,9 +271,10 @@ impl Estimate {
                     "model"
                 },
                 format!(
-                    "a run needs about {} MB of memory, above the limit of {} MB{hint} (or \
-                     raise --max-memory)",
+                    "a run needs about {} MB of memory, above {} of {} MB{hint} (or \
+                     raise --max-memory where the memory is there)",
                     self.memory_bytes.div_ceil(1_000_000),
+                    limits.max_memory_from.describe(),
                     limits.max_memory_bytes / 1_000_000
                 ),
             ));
@@ -331,6 +421,11 @@ mod tests {
         );
         let m = tight(|l| l.max_memory_bytes = 1_000_000);
         assert!(m.contains("model") && m.contains("--max-memory"), "{m}");
+        let m = tight(|l| {
+            l.max_memory_bytes = 1_000_000;
+            l.max_memory_from = MemoryLimitFrom::AddressSpace;
+        });
+        assert!(m.contains("RLIMIT_AS") && m.contains("--max-memory"), "{m}");
         let m = check_study_steps(DEFAULT_MAX_STEPS + 1, "--duration")
             .unwrap_err()
             .to_string();
@@ -344,5 +439,15 @@ mod tests {
             m.contains("--checkpoint-every") && m.contains("1000 checkpoints"),
             "{m}"
         );
+    }
+
+    #[test]
+    fn cgroup_limits_parse_and_unlimited_is_none() {
+        assert_eq!(parse_cgroup_limit("4294967296\n"), Some(4_294_967_296));
+        assert_eq!(parse_cgroup_limit("max\n"), None);
+        assert_eq!(parse_cgroup_limit("9223372036854771712\n"), None);
+        assert_eq!(parse_cgroup_limit(""), None);
+        let (bound, _) = default_max_memory();
+        assert!(bound <= DEFAULT_MAX_MEMORY_BYTES);
     }
 }

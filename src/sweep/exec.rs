@@ -10,7 +10,7 @@ use rayon::prelude::*;
 use serde_json::Value;
 
 use super::file;
-use super::points::{expand, plan, Plan, Point};
+use super::points::{checked_points, expand, expand_points, plan, Plan, Point};
 use super::record::{point_dir, Record, Row, DONE};
 use crate::error::{Error, Result};
 use crate::output::{create_dir_all, write_atomic};
@@ -140,8 +140,29 @@ struct Loaded {
     text: String,
 }
 
+/// A sweep file checked as a definition, with its base read but no point built.
+struct Defined {
+    plan: Plan,
+    base: Value,
+    base_label: String,
+    base_digest: String,
+    text: String,
+}
+
 /// Reads the sweep file and its base, and checks every point.
 fn load(sweep_path: &Path) -> Result<Loaded> {
+    let d = define(sweep_path)?;
+    let points = expand(&d.plan, &d.base, &d.base_label)?;
+    Ok(Loaded {
+        plan: d.plan,
+        points,
+        base_digest: d.base_digest,
+        text: d.text,
+    })
+}
+
+/// Reads the sweep file and its base and checks the definition (axes, counts, labels).
+fn define(sweep_path: &Path) -> Result<Defined> {
     let (file, text) = file::load(sweep_path)?;
     let plan = plan(&file)?;
     let base_path: PathBuf = match sweep_path.parent() {
@@ -156,35 +177,47 @@ fn load(sweep_path: &Path) -> Result<Loaded> {
         line: e.line(),
         column: e.column().max(1),
     })?;
-    let points = expand(&plan, &base, &label)?;
-    Ok(Loaded {
+    Ok(Defined {
         plan,
-        points,
+        base,
+        base_label: label,
         base_digest: blake3::hash(&bytes).to_hex().to_string(),
         text,
     })
 }
 
-/// What `dsmcosim validate` says about a sweep file: its points all validate, and
-/// which of them have a channel the network never serves.
+/// What `dsmcosim validate` says about a sweep file: its definition holds and the
+/// points [`checked_points`] picks validate, and which of those have a channel the
+/// network never serves.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Checked {
     /// Sweep name.
     pub name: String,
     /// Points.
     pub points: usize,
+    /// Point scenarios built and validated ([`checked_points`]): at most
+    /// `Σ min(values, 1 000) + Π extremes` over the axes, never `points` for a sweep of
+    /// long ranges.
+    pub checked: usize,
     /// One line per point whose plan has a channel with no achieved period (a TDMA
     /// slot list that leaves out one of its senders): such a run's delays grow without
     /// bound and it usually diverges.
     pub warnings: Vec<String>,
 }
 
-/// Checks the sweep in `sweep_path` as `sweep` does before it runs anything, and plans
-/// every point ([`crate::run::plan::plan`]) to find channels that are never served.
+/// Checks the sweep in `sweep_path`: the definition as `sweep` does (axes, labels, the
+/// count of points), then the bounded set of points [`checked_points`] picks, each
+/// built, validated and preflighted as `sweep` does before it runs anything, and
+/// planned ([`crate::run::plan::plan`]) to find channels that are never served. A
+/// point outside the set that a rule refuses (a value inside a range of more than
+/// 1 000 steps, a combination that is not an extreme one) is refused by `sweep`, which
+/// checks every point before it runs any.
 pub fn check(sweep_path: &Path) -> Result<Checked> {
-    let loaded = load(sweep_path)?;
+    let d = define(sweep_path)?;
+    let indices = checked_points(&d.plan);
+    let points = expand_points(&d.plan, &d.base, &d.base_label, &indices)?;
     let mut warnings = Vec::new();
-    for p in &loaded.points {
+    for p in &points {
         let scenario = crate::scenario::parse_str(&p.text, &p.key)?;
         let plan = crate::run::plan::plan(&scenario)?;
         let never: Vec<&str> = plan
@@ -197,14 +230,15 @@ pub fn check(sweep_path: &Path) -> Result<Checked> {
             warnings.push(format!(
                 "point p{} ({}): the slot list never serves channel {} (achieved τ infinite)",
                 p.index,
-                loaded.plan.describe(p.index),
+                d.plan.describe(p.index),
                 never.join(", ")
             ));
         }
     }
     Ok(Checked {
-        name: loaded.plan.name.clone(),
-        points: loaded.points.len(),
+        name: d.plan.name.clone(),
+        points: d.plan.points.len(),
+        checked: points.len(),
         warnings,
     })
 }

@@ -532,6 +532,125 @@ fn build(
     Ok((doc, created))
 }
 
+/// Values of one axis that [`checked_points`] takes at most (all of an axis with no more).
+pub const CHECKED_VALUES_PER_AXIS: usize = 1_000;
+
+/// The values of axis `a` that `validate` checks: all of them up to
+/// [`CHECKED_VALUES_PER_AXIS`], else that many evenly spaced with both ends, and the
+/// smallest and largest value of a numeric axis wherever they are. Sorted, distinct.
+fn checked_values(a: &Axis) -> Vec<usize> {
+    let n = a.values.len();
+    let mut picks: Vec<usize> = if n <= CHECKED_VALUES_PER_AXIS {
+        (0..n).collect()
+    } else {
+        let last = CHECKED_VALUES_PER_AXIS - 1;
+        (0..CHECKED_VALUES_PER_AXIS)
+            .map(|j| j * (n - 1) / last)
+            .collect()
+    };
+    picks.extend(extremes(a));
+    picks.sort_unstable();
+    picks.dedup();
+    picks
+}
+
+/// The values of axis `a` that the extreme combinations take: the first smallest and
+/// first largest of a numeric axis (a range's ends), else every checked value.
+fn extremes(a: &Axis) -> Vec<usize> {
+    match a.numbers() {
+        Some(x) => {
+            let (mut lo, mut hi) = (0, 0);
+            for (i, &v) in x.iter().enumerate() {
+                if v < x[lo] {
+                    lo = i;
+                }
+                if v > x[hi] {
+                    hi = i;
+                }
+            }
+            if lo == hi {
+                vec![lo]
+            } else {
+                vec![lo.min(hi), lo.max(hi)]
+            }
+        }
+        None if a.values.len() <= CHECKED_VALUES_PER_AXIS => (0..a.values.len()).collect(),
+        None => checked_values(a),
+    }
+}
+
+/// The points `validate` builds and checks of a sweep (indices, ascending), a bounded
+/// set instead of all of them:
+///
+/// - every axis's checked values ([`CHECKED_VALUES_PER_AXIS`]: every value of an axis
+///   of up to 1 000, else 1 000 evenly spaced with both ends and its smallest and
+///   largest), each with the other axes at their first value (`zip`: the point of that
+///   index);
+/// - the extreme combinations: every combination of each axis's smallest and largest
+///   value (a range's ends; all checked values of an axis that is not all numbers), where
+///   derived sizes (steps, trace rows, memory) that grow or shrink with each field
+///   peak;
+/// - of each configuration only its first repetition (repetitions differ only in their
+///   derived seed).
+///
+/// A sweep whose axes have at most 1 000 values each and no more than two numbers or a
+/// few non-numbers per axis is checked whole; a 100 000-step range alone is 1 000 points.
+/// The set is at most `Σ min(values, 1 000) + Π extremes` configurations and never more
+/// than the sweep's points. `sweep` itself still builds and checks every point before
+/// it runs any ([`expand`]).
+pub fn checked_points(plan: &Plan) -> Vec<usize> {
+    let lens: Vec<usize> = plan.axes.iter().map(|a| a.values.len()).collect();
+    let configurations = plan.points.len() / plan.repeat;
+    let mut set = std::collections::BTreeSet::new();
+    match plan.combine {
+        Combine::Zip => {
+            for a in &plan.axes {
+                set.extend(checked_values(a));
+                set.extend(extremes(a));
+            }
+        }
+        Combine::Factorial => {
+            // Configuration of value indices `idx`: the last axis varies fastest.
+            let config =
+                |idx: &[usize]| idx.iter().zip(&lens).fold(0usize, |c, (&v, &n)| c * n + v);
+            let mut idx = vec![0; lens.len()];
+            for (k, a) in plan.axes.iter().enumerate() {
+                for v in checked_values(a) {
+                    idx[k] = v;
+                    set.insert(config(&idx));
+                }
+                idx[k] = 0;
+            }
+            // Every combination of the axes' extremes, as an odometer.
+            let ext: Vec<Vec<usize>> = plan.axes.iter().map(extremes).collect();
+            let mut at = vec![0usize; ext.len()];
+            loop {
+                let idx: Vec<usize> = at.iter().zip(&ext).map(|(&j, e)| e[j]).collect();
+                set.insert(config(&idx));
+                let mut k = ext.len();
+                loop {
+                    if k == 0 {
+                        break;
+                    }
+                    k -= 1;
+                    at[k] += 1;
+                    if at[k] < ext[k].len() {
+                        break;
+                    }
+                    at[k] = 0;
+                }
+                if at.iter().all(|&j| j == 0) {
+                    break;
+                }
+            }
+        }
+    }
+    set.into_iter()
+        .filter(|&c| c < configurations)
+        .map(|c| c * plan.repeat)
+        .collect()
+}
+
 /// Builds and validates every point's scenario from `base` (the base scenario's JSON;
 /// `base_label` names it in messages).
 ///
@@ -539,6 +658,18 @@ fn build(
 /// the error, naming the axis (`axes[1].pointer: …`) or the point and its axis values
 /// (`point p3 (drift = 50, T = 0.5): dt: …`).
 pub fn expand(plan: &Plan, base: &Value, base_label: &str) -> Result<Vec<Point>> {
+    let all: Vec<usize> = (0..plan.points.len()).collect();
+    expand_points(plan, base, base_label, &all)
+}
+
+/// [`expand`] of the points `indices` (ascending) only: the first failure in their order
+/// is the error.
+pub fn expand_points(
+    plan: &Plan,
+    base: &Value,
+    base_label: &str,
+    indices: &[usize],
+) -> Result<Vec<Point>> {
     if !base.is_object() {
         return Err(Error::invalid(
             "base",
@@ -566,9 +697,9 @@ pub fn expand(plan: &Plan, base: &Value, base_label: &str) -> Result<Vec<Point>>
             )
         })?)
     };
-    let results: Vec<Result<Point>> = (0..plan.points.len())
-        .into_par_iter()
-        .map(|i| point(plan, base, base_seed, i))
+    let results: Vec<Result<Point>> = indices
+        .par_iter()
+        .map(|&i| point(plan, base, base_seed, i))
         .collect();
     results.into_iter().collect()
 }
