@@ -322,6 +322,10 @@ pub fn study(
     }
     // Validate every cell before anything runs.
     let mono = parse(&mono, "monolithic reference")?;
+    // Every run has the monolithic reference's steps: what `run` refuses for one run,
+    // the study refuses for all of its runs (each timed TIMING_RUNS times).
+    let runs = 1 + SCHEMES.len() * DISTRIBUTIONS.len() * (1 + TAUS.len()) * TIMING_RUNS;
+    crate::run::budget::check_study_steps(mono.steps.saturating_mul(runs as u64), "--duration")?;
     let mut plans = Vec::new();
     for &(scheme, value) in &SCHEMES {
         for &distribution in &DISTRIBUTIONS {

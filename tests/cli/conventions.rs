@@ -99,35 +99,18 @@ fn every_command_that_reads_a_scenario_takes_set() {
     let ring = repo().join("scenarios/mechanisms/ring12.json");
     let ring = ring.to_str().unwrap();
     let out = dir.join("out");
-    let o = run(&[
-        "coupling",
-        ring,
-        "--set",
-        "/partition=null",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
-    assert_eq!(o.status.code(), Some(2), "{}", said(&o));
-    assert!(
-        String::from_utf8_lossy(&o.stderr).contains("partition"),
-        "{}",
-        said(&o)
-    );
-    for command in ["coupling", "tradeoff", "stability-map"] {
-        let o = run(&[
-            command,
-            ring,
-            "--set",
-            "/nowhere/deep=1",
-            "-o",
-            out.to_str().unwrap(),
-        ]);
-        assert_eq!(o.status.code(), Some(2), "{command}: {}", said(&o));
-        assert!(
-            String::from_utf8_lossy(&o.stderr).contains("--set /nowhere/deep=1"),
-            "{command}: {}",
-            said(&o)
-        );
+    // (command, override, what the refusal names)
+    let cases = [
+        ("coupling", "/partition=null", "partition"),
+        ("coupling", "/nowhere/deep=1", "--set /nowhere/deep=1"),
+        ("tradeoff", "/nowhere/deep=1", "--set /nowhere/deep=1"),
+        ("stability-map", "/nowhere/deep=1", "--set /nowhere/deep=1"),
+    ];
+    for (command, set, named) in cases {
+        let o = run(&[command, ring, "--set", set, "-o", out.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(2), "{command} {set}: {}", said(&o));
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(e.contains(named), "{command} {set}: {}", said(&o));
     }
     assert!(!out.exists(), "nothing written");
     // And a good override changes what runs: the study of a 1.2-s ring.
@@ -268,4 +251,28 @@ fn has_temporary(dir: &std::path::Path) -> bool {
             .filter_map(|e| e.ok())
             .any(|e| e.file_name().to_string_lossy().contains(".tmp"))
     })
+}
+
+#[test]
+fn a_coupling_study_past_the_step_limit_is_refused_before_it_runs() {
+    // 10⁹ s of the thesis scene at 1 ms: 10¹² steps per run, 292 runs. Refused at once
+    // naming the horizon, nothing written (it used to start computing).
+    let dir = scratch("conventions_coupling_limit");
+    let scenario = repo().join("scenarios/grid16_space_fixed.json");
+    let out = dir.join("out");
+    let o = run(&[
+        "coupling",
+        scenario.to_str().unwrap(),
+        "--set",
+        "/duration=1e9",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", said(&o));
+    assert!(
+        said(&o).contains("--duration: the study would integrate"),
+        "{}",
+        said(&o)
+    );
+    assert!(!out.exists());
 }
