@@ -198,7 +198,8 @@ fn a_file_of_the_other_kind_or_a_mistyped_key_gets_a_pointer_to_the_fix() {
 
 #[test]
 fn ctrl_c_stops_a_run_cleanly_and_says_how_to_continue() {
-    // A run of 3000 s of simulated time (about a minute of wall time): SIGINT once it
+    // A run of 3000 s of simulated time of a net at rest (about a minute of wall
+    // time): SIGINT once it
     // has claimed its directory. It stops at the end of its slice, writes what it has
     // (summary.json "interrupted", no temporary file left), exits 130 and names the
     // option that makes a run resumable. Guarded against a hang only (300 s).
@@ -215,6 +216,9 @@ fn ctrl_c_stops_a_run_cleanly_and_says_how_to_continue() {
             "/duration=3000",
             "--set",
             "/output/decimation=10000",
+            // At rest, so that nothing can diverge before the signal lands.
+            "--set",
+            "/forces=[]",
         ])
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::piped())

@@ -408,57 +408,6 @@ fn memory_grid(n: u32, solver: Option<Value>) -> Value {
     v
 }
 
-/// The estimate `validate` prints [MB].
-fn estimated_mb(file: &str) -> u64 {
-    let o = bounded(&["validate", file], Duration::from_secs(300));
-    assert_eq!(o.status.code(), Some(0), "{}", said(&o));
-    let text = String::from_utf8_lossy(&o.stdout).into_owned();
-    let at = text.find("needs about ").expect("an estimate") + "needs about ".len();
-    text[at..].split(' ').next().unwrap().parse().expect("MB")
-}
-
-/// The memory estimate bounds the measured peak resident memory (the child's own
-/// `ru_maxrss`, from `wait4`) of 10 steps on 64×64 and 128×128 grids, on both solves.
-/// What is asserted is memory, not time.
-#[test]
-fn estimate_bounds_the_measured_peak() {
-    let dir = scratch("limits-memory");
-    let cg = json!({"kind": "cg", "max_iterations": 10, "tolerance": 1e-9});
-    for n in [64, 128] {
-        for (name, solver) in [("exact", None), ("cg", Some(cg.clone()))] {
-            let file = write_json(&dir, &format!("g{n}_{name}.json"), &memory_grid(n, solver));
-            let f = file.to_str().unwrap();
-            let estimate = estimated_mb(f);
-            let out = dir.join(format!("g{n}_{name}_out"));
-            // Reaped by `wait4` below, which also reports its peak memory.
-            #[allow(clippy::zombie_processes)]
-            let child = bin()
-                .args(["run", f, "--out", out.to_str().unwrap()])
-                .stdout(Stdio::null())
-                .stderr(Stdio::null())
-                .spawn()
-                .expect("spawn dsmcosim");
-            let mut status = 0;
-            // SAFETY: `rusage` is plain data, zero is a valid value of it.
-            let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
-            // SAFETY: waits for our own child, writing through valid exclusive pointers;
-            // `child` is not waited again (std's wait would find it reaped).
-            let pid = unsafe { libc::wait4(child.id() as libc::pid_t, &mut status, 0, &mut usage) };
-            assert_eq!(pid, child.id() as libc::pid_t, "wait4");
-            assert!(
-                libc::WIFEXITED(status) && libc::WEXITSTATUS(status) == 0,
-                "{n}×{n} {name}: run failed"
-            );
-            let peak_mb = (usage.ru_maxrss as u64 * 1024).div_ceil(1_000_000);
-            assert!(
-                peak_mb <= estimate,
-                "{n}×{n} {name}: measured {peak_mb} MB above the estimate {estimate} MB"
-            );
-        }
-    }
-    std::fs::remove_dir_all(&dir).unwrap();
-}
-
 /// Under an address-space limit (`ulimit -v`) below a run's estimate, the default
 /// `--max-memory` is that limit: the run is refused before it starts, exit 2, the
 /// message naming the estimate, the limit and the flag, nothing written — instead of an
