@@ -42,7 +42,7 @@ pub const MEMORY_PER_BODY: u64 = 2_500;
 /// path's (same grids and command), per factor entry: 17.4 (64×64), 17.0 (128×128),
 /// 15.7 (256×256), 12.9 (512×512), 12.8 (1000×1000); the small grids' excess is covered
 /// by the margin of [`MEMORY_BASE`] and [`MEMORY_PER_BODY`] (each size's total is
-/// bounded: `estimate_bounds_the_measured_peak` in tests/cli/limits.rs).
+/// bounded: `estimate_bounds_the_measured_peak` in tests/memory_peak.rs).
 pub const BYTES_PER_FACTOR_ENTRY: u64 = 16;
 
 /// Where a run's memory bound comes from.
