@@ -8,7 +8,11 @@
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
 
-use serde_json::{json, Value};
+use serde_json::json;
+
+#[path = "support/memory_grid.rs"]
+mod memory_grid;
+use memory_grid::memory_grid;
 
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_dsmcosim"))
@@ -22,25 +26,6 @@ fn scratch(name: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).expect("scratch dir");
     d
-}
-
-/// A monolithic n×n grid run for 10 steps, tracing one body; `solver` as given (the
-/// default exact solve when `None`).
-fn memory_grid(n: u32, solver: Option<Value>) -> Value {
-    let mut v = json!({
-        "name": format!("grid{n}"), "seed": 7, "duration": 0.01, "dt": 0.001,
-        "integrator": "euler",
-        "stabilizer": {"kind": "smc", "mu": 0.05, "k": 10.0, "epsilon": 0.1},
-        "model": {"grid": {"rows": n, "cols": n, "spacing": 1.8, "mass": 1.0, "size": 0.2}},
-        "forces": [{"body": 1, "amplitude": [0, 0, 20], "omega": 2.0, "phase": 0.0,
-                    "from": 0.0, "until": 0.01}],
-        "measurement": {"period": 0.005},
-        "output": {"decimation": 10, "trace_bodies": [1], "plot_bodies": [1]}
-    });
-    if let Some(s) = solver {
-        v["solver"] = s;
-    }
-    v
 }
 
 /// The estimate `validate` prints [MB].
