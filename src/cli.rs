@@ -402,7 +402,7 @@ pub fn main() -> ExitCode {
 /// (created if missing), each replaced atomically; returns the paths written.
 fn write_man_pages(out: &std::path::Path) -> crate::Result<Vec<PathBuf>> {
     let command = <Cli as clap::CommandFactory>::command();
-    crate::output::create_dir_all(out)?;
+    crate::output::create_out_dir(out)?;
     let mut pages = vec![("dsmcosim".to_string(), command.clone())];
     for sub in command.get_subcommands().filter(|s| s.get_name() != "help") {
         let name = format!("dsmcosim-{}", sub.get_name());

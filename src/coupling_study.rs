@@ -49,7 +49,7 @@ mod write;
 use self::write::{fmt, write_csv, write_markdown, write_plots};
 use crate::cosim::{CoSim, Observer, StepValues};
 use crate::error::{Error, Result};
-use crate::output::create_dir_all;
+use crate::output::create_out_dir;
 use crate::scenario::{parse_str, Scenario};
 
 /// The schemes the study compares: a label and the `partition.coupling` value (JSON).
@@ -381,7 +381,7 @@ pub fn study(
             });
         }
     }
-    create_dir_all(out)?;
+    create_out_dir(out)?;
     write_csv(out, &cells)?;
     let mono_drift = (mono.watch.ke_end - mono.watch.ke_tail_start) / mono.watch.ke_tail_start;
     let [p0, l0] = mono.watch.momenta_tail_start;

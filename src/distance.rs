@@ -12,7 +12,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
-use crate::output::{create_dir_all, write_atomic};
+use crate::output::{create_out_dir, write_atomic};
 use crate::report::{write_line_plot, LinePlot, Scale, Series};
 
 /// Most (run, body) curves one comparison draws.
@@ -138,7 +138,7 @@ pub fn command(reference: &Path, runs: &[PathBuf], bodies: &[u32], out: &Path) -
             columns.push((format!("{}_B{id}", run_name(dir)), d));
         }
     }
-    create_dir_all(out)?;
+    create_out_dir(out)?;
     // Through the CSV writer: a run path with a comma or a quote is one quoted field.
     let header = std::iter::once("t".to_string()).chain(columns.iter().map(|(n, _)| n.clone()));
     let rows = refer.rows.iter().enumerate().map(|(i, row)| {

@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use serde_json::Value;
 
 use crate::error::{Error, Result};
-use crate::output::{create_dir_all, write_atomic};
+use crate::output::{create_out_dir, write_atomic};
 use crate::scenario::file::ScenarioFile;
 use crate::sweep::file::SweepFile;
 
@@ -222,7 +222,7 @@ fn fields(
 
 /// Writes both schemas into `dir` (created if missing); returns the files written.
 pub fn write(dir: &Path) -> Result<Vec<PathBuf>> {
-    create_dir_all(dir)?;
+    create_out_dir(dir)?;
     let mut written = Vec::new();
     let fields = path_of(dir, FIELDS);
     write_atomic(&fields, reference().as_bytes())?;

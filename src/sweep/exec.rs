@@ -13,7 +13,7 @@ use super::file;
 use super::points::{checked_points, expand, expand_points, plan, Plan, Point};
 use super::record::{point_dir, Record, Row, DONE};
 use crate::error::{Error, Result};
-use crate::output::{create_dir_all, write_atomic};
+use crate::output::{create_dir_all, create_out_dir, write_atomic};
 use crate::progress::Progress;
 
 /// Which share of the points one invocation runs: `--shard i/n` runs the points whose
@@ -262,7 +262,7 @@ pub fn run(sweep_path: &Path, out: &Path, options: &Options) -> Result<Report> {
             ),
         ));
     }
-    create_dir_all(out)?;
+    create_out_dir(out)?;
     // One sweep at a time in a directory: a second `sweep --resume` (a requeued cluster
     // task) is refused at once, naming the holder, instead of both rerunning the same
     // points and neither writing sweep.csv. Held until the sweep returns.

@@ -11,7 +11,7 @@ use super::file;
 use super::points::plan;
 use super::record::{Record, Row, DONE};
 use crate::error::{Error, Result};
-use crate::output::{create_dir_all, write_atomic};
+use crate::output::{create_out_dir, write_atomic};
 
 /// What a merge found.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -184,7 +184,7 @@ pub fn merge(out: &Path, shards: &[PathBuf]) -> Result<MergeReport> {
             ),
         ));
     }
-    create_dir_all(out)?;
+    create_out_dir(out)?;
     write_atomic(&out.join("sweep.json"), text.as_bytes())?;
     super::write_outputs(out, &plan, &records)?;
     Ok(MergeReport {

@@ -18,7 +18,7 @@ use super::measure::Counter;
 use crate::cosim::{CoSim, Observer, StepValues};
 use crate::error::{Error, Result};
 use crate::kernel::SimTime;
-use crate::output::{create_dir_all, write_atomic};
+use crate::output::{create_out_dir, write_atomic};
 use crate::report::{write_heatmap, CellClass, Heatmap};
 use crate::scenario::model::Stabilizer;
 use crate::scenario::parse_str;
@@ -184,7 +184,7 @@ const OUTCOMES: [CellClass<'static>; 3] = [
 ];
 
 fn write_map(out: &Path, map: &StabilityMap) -> Result<()> {
-    create_dir_all(out)?;
+    create_out_dir(out)?;
     let mut csv = String::from("mu,dt,outcome,max_violation,error\n");
     for c in &map.cells {
         let _ = writeln!(

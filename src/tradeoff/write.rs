@@ -5,12 +5,12 @@ use std::path::Path;
 
 use super::{Status, Study, Variant};
 use crate::error::Result;
-use crate::output::{create_dir_all, write_atomic};
+use crate::output::{create_out_dir, write_atomic};
 use crate::report::{write_line_plot, LinePlot, Scale, Series};
 
 /// Writes every file of `study` into `out` (created if needed).
 pub fn write_study(out: &Path, study: &Study) -> Result<()> {
-    create_dir_all(out)?;
+    create_out_dir(out)?;
     write_atomic(&out.join("tradeoff.csv"), csv(study).as_bytes())?;
     write_atomic(&out.join("tradeoff.md"), markdown(study).as_bytes())?;
     plots(out, study)
@@ -392,7 +392,7 @@ mod tests {
     /// named for the `test`.
     fn rendered(test: &str) -> (String, String) {
         let dir = std::env::temp_dir().join(format!("dsmcosim-{test}-{}", std::process::id()));
-        create_dir_all(&dir).unwrap();
+        crate::output::create_dir_all(&dir).unwrap();
         plots(&dir, &study()).unwrap();
         let read = |f: &str| std::fs::read_to_string(dir.join(f)).unwrap();
         let out = (read("work_precision.svg"), read("pareto.svg"));

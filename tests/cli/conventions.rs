@@ -178,6 +178,21 @@ fn a_file_of_the_other_kind_or_a_mistyped_key_gets_a_pointer_to_the_fix() {
         said(&o)
     );
     assert_eq!(std::fs::read_to_string(&notes).unwrap(), "mine");
+    // The same for every command that writes into an --out directory.
+    let ring = repo().join("scenarios/mechanisms/ring12.json");
+    let o = run(&[
+        "coupling",
+        ring.to_str().unwrap(),
+        "-o",
+        notes.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", said(&o));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("is a file, not a directory"),
+        "{}",
+        said(&o)
+    );
+    assert_eq!(std::fs::read_to_string(&notes).unwrap(), "mine");
     // A missing stored run: the command that stores it.
     let refs = dir.join("refs");
     std::fs::create_dir_all(&refs).unwrap();
