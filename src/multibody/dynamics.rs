@@ -17,7 +17,7 @@ use super::solver::SolveError;
 use super::state::{Rates, State};
 use super::system::System;
 use crate::kernel::SimTime;
-use crate::scenario::model::Stabilizer;
+use crate::scenario::model::{LoadAt, Stabilizer};
 
 /// Why a rate evaluation failed.
 #[derive(Debug, Clone, PartialEq)]
@@ -130,13 +130,22 @@ impl System {
     /// Stage 2: external, held and gyroscopic loads.
     fn body_loads(&mut self, t: SimTime, state: &State) {
         self.ws.force.copy_from_slice(&self.extra_force);
-        for f in &self.forces {
-            self.ws.force[f.body] += f.at(t);
-        }
         if self.rigid {
             for i in 0..state.omega.len() {
                 let w = state.omega[i];
                 self.ws.torque[i] = self.extra_torque[i] - w.cross(&(self.ws.inertia_world[i] * w));
+            }
+        }
+        for f in &self.forces {
+            match f.applied {
+                LoadAt::Centre => self.ws.force[f.body] += f.at(t),
+                // Off the centre and torques: validation chose rigid bodies.
+                _ => {
+                    let rotation = UnitQuaternion::new_normalize(state.q[f.body]);
+                    let (force, torque) = f.load(t, &rotation);
+                    self.ws.force[f.body] += force;
+                    self.ws.torque[f.body] += torque;
+                }
             }
         }
         // Later stages of a step carry the extra loads by their rates (the first stage,
@@ -197,10 +206,20 @@ impl System {
         Ok(())
     }
 
-    /// Stage 4a: `a = M⁻¹ F`, `α = I⁻¹ τ`.
+    /// Stage 4a: `a = M⁻¹ F` (plus gravity on every movable body), `α = I⁻¹ τ`.
     fn accelerations(&mut self) {
         for i in 0..self.ws.acc.len() {
             self.ws.acc[i] = self.ws.force[i] * self.mass.inv_mass[i];
+        }
+        // Gravity as an acceleration, not as a force `m g`: a body held immovable
+        // (`1/m = 0`) stays put, and every copy of a body (its owner's, a ghost
+        // integrated on another node) falls alike without gravity crossing the network.
+        if let Some(g) = self.gravity {
+            for (a, &inv) in self.ws.acc.iter_mut().zip(&self.mass.inv_mass) {
+                if inv != 0.0 {
+                    *a += g;
+                }
+            }
         }
         for i in 0..self.ws.alpha.len() {
             self.ws.alpha[i] = self.mass.inv_inertia[i] * self.ws.torque[i];

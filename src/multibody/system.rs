@@ -30,6 +30,8 @@ pub struct System {
     pub(crate) inertia: Vec<Vector3<f64>>,
     pub(crate) links: Vec<Link>,
     pub(crate) forces: Vec<ForceSpec>,
+    /// Uniform gravity [m/s²] on every movable body (`None`: none).
+    pub(crate) gravity: Option<Vector3<f64>>,
     pub(crate) stabilizer: Stabilizer,
     /// Per-link SMC surface parameter μ [s] where it differs from the stabilizer's
     /// (empty: every link uses the stabilizer's μ).
@@ -176,6 +178,7 @@ impl System {
             inertia,
             links,
             forces: scenario.forces.clone(),
+            gravity: scenario.gravity,
             stabilizer: scenario.stabilizer,
             link_mu: Vec::new(),
             integrator: scenario.integrator,

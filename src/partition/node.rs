@@ -15,7 +15,7 @@ use super::Layout;
 use crate::kernel::SimTime;
 use crate::multibody::{State, System};
 use crate::network::Payload;
-use crate::scenario::model::{BodyModel, Coupling, GhostMode, Scenario};
+use crate::scenario::model::{BodyModel, Coupling, GhostMode, LoadAt, Scenario};
 
 /// A border force received from another node: held until the next arrival (`reset`),
 /// or extrapolated with its rate (`predict`).
@@ -261,9 +261,21 @@ impl Node {
         let mut force_rate = Vector3::zeros();
         let mut torque_rate = Vector3::zeros();
         for f in self.system.forces.iter().filter(|f| f.body == i) {
-            force += f.at(t);
+            if f.applied == LoadAt::Centre {
+                force += f.at(t);
+                if rates {
+                    force_rate += f.rate_at(t);
+                }
+                continue;
+            }
+            let rotation = nalgebra::UnitQuaternion::new_normalize(self.state.q[i]);
+            let (f_now, t_now) = f.load(t, &rotation);
+            force += f_now;
+            torque += t_now;
             if rates {
-                force_rate += f.rate_at(t);
+                let (fr, tr) = f.load_rate(t, &rotation, &self.state.omega[i]);
+                force_rate += fr;
+                torque_rate += tr;
             }
         }
         for &l in &self.incident[i] {

@@ -107,6 +107,9 @@ pub struct ScenarioFile {
     /// External forces; default none.
     #[serde(default)]
     pub forces: Vec<ForceFile>,
+    /// External torques (world frame); default none. Needs rigid bodies.
+    #[serde(default)]
+    pub torques: Vec<TorqueFile>,
     /// Divergence bound; default `max_violation` 1 m.
     #[serde(default)]
     pub divergence: DivergenceFile,
@@ -314,6 +317,14 @@ pub struct ModelFile {
         skip_serializing_if = "Option::is_none"
     )]
     pub links: Option<Vec<LinkFile>>,
+    /// Uniform gravity `[gx, gy, gz]` [m/s²] on every body (e.g. `[0, 0, -9.81]`);
+    /// default none.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub gravity: Option<[f64; 3]>,
 }
 
 /// `model.grid`: bodies on the z = 0 plane, linked to their 4-neighbours.
@@ -404,6 +415,49 @@ pub struct ForceFile {
     #[serde(default)]
     pub phase: f64,
     /// Switch-on time [s], ≥ 0, inclusive; default 0 (on from the start).
+    #[serde(default)]
+    pub from: f64,
+    /// Switch-off time [s], ≥ `from`, exclusive; default never.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub until: Option<f64>,
+    /// Linear amplitude envelope; default none (scale 1).
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub ramp: Option<RampFile>,
+    /// Point of application in the body frame [m]; default the centre of mass. Off the
+    /// centre the force also turns the body (torque `(R r) × F`): needs rigid bodies.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub point: Option<[f64; 3]>,
+}
+
+/// One entry of `torques`: `amplitude · sin(omega · t + phase)` [N·m] about the body's
+/// centre, in the world frame, for `from ≤ t < until`; the same time function as a
+/// force's.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct TorqueFile {
+    /// Id of the driven body.
+    pub body: u32,
+    /// Amplitude vector [N·m]; required.
+    pub amplitude: [f64; 3],
+    /// Angular frequency ω [rad/s]; default 0 (with `phase` = π/2, a constant torque).
+    #[serde(default)]
+    pub omega: f64,
+    /// Phase φ [rad]; default 0.
+    #[serde(default)]
+    pub phase: f64,
+    /// Switch-on time [s], ≥ 0, inclusive; default 0.
     #[serde(default)]
     pub from: f64,
     /// Switch-off time [s], ≥ `from`, exclusive; default never.

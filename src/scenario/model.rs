@@ -138,13 +138,26 @@ pub struct LinkSpec {
     pub anchor_b: Vector3<f64>,
 }
 
-/// A sinusoidal external force at a body's centre:
-/// `amplitude · sin(omega · t + phase)` for `from ≤ t < until` (absolute time t).
+/// Where an external load acts on its body.
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+pub enum LoadAt {
+    /// A force at the centre of mass (no torque).
+    #[default]
+    Centre,
+    /// A force at a point fixed in the body frame [m]: it adds the torque `(R r) × F`.
+    Point(Vector3<f64>),
+    /// A pure torque [N·m] in the world frame (the amplitude is a torque).
+    Torque,
+}
+
+/// A sinusoidal external load on a body, `amplitude · sin(omega · t + phase)` for
+/// `from ≤ t < until` (absolute time t): a force at the centre (the thesis's loads), a
+/// force at a body-frame point, or a pure torque ([`LoadAt`]).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ForceSpec {
     /// Index of the driven body.
     pub body: usize,
-    /// Amplitude vector [N].
+    /// Amplitude vector [N] (a torque's [N·m]).
     pub amplitude: Vector3<f64>,
     /// Angular frequency ω [rad/s]; `0` gives the constant force `amplitude · sin(phase)`.
     pub omega: f64,
@@ -156,6 +169,8 @@ pub struct ForceSpec {
     pub until: Option<SimTime>,
     /// Optional linear amplitude envelope.
     pub ramp: Option<Ramp>,
+    /// Where the load acts.
+    pub applied: LoadAt,
 }
 
 /// A linear amplitude envelope: scale `a0` until `t0`, `a1` from `t1`, linear between.
@@ -197,6 +212,39 @@ impl Ramp {
 }
 
 impl ForceSpec {
+    /// The force [N] and torque [N·m] this load puts on its body at time `t`, the body
+    /// turned by `rotation` (body → world; only a load at a point reads it).
+    pub fn load(&self, t: SimTime, rotation: &UnitQuaternion<f64>) -> (Vector3<f64>, Vector3<f64>) {
+        let v = self.at(t);
+        match self.applied {
+            LoadAt::Centre => (v, Vector3::zeros()),
+            LoadAt::Point(r) => (v, (rotation * r).cross(&v)),
+            LoadAt::Torque => (Vector3::zeros(), v),
+        }
+    }
+
+    /// The rates of [`load`](Self::load) [N/s, N·m/s], the body spinning at `omega`
+    /// [rad/s]: a point's lever arm turns, `d((R r) × F)/dt = (ω × R r) × F + R r × Ḟ`.
+    pub fn load_rate(
+        &self,
+        t: SimTime,
+        rotation: &UnitQuaternion<f64>,
+        omega: &Vector3<f64>,
+    ) -> (Vector3<f64>, Vector3<f64>) {
+        let rate = self.rate_at(t);
+        match self.applied {
+            LoadAt::Centre => (rate, Vector3::zeros()),
+            LoadAt::Point(r) => {
+                let arm = rotation * r;
+                (
+                    rate,
+                    omega.cross(&arm).cross(&self.at(t)) + arm.cross(&rate),
+                )
+            }
+            LoadAt::Torque => (Vector3::zeros(), rate),
+        }
+    }
+
     /// The force's time derivative [N/s] at `t` (zero where the force is off).
     pub fn rate_at(&self, t: SimTime) -> Vector3<f64> {
         let on = t >= self.from && self.until.is_none_or(|u| t < u);
@@ -564,8 +612,11 @@ pub struct Scenario {
     pub bodies: Vec<BodySpec>,
     /// Links, in file order (link k of the file is `links[k-1]`).
     pub links: Vec<LinkSpec>,
-    /// External forces.
+    /// External forces and torques.
     pub forces: Vec<ForceSpec>,
+    /// Uniform gravity [m/s²] acting on every movable body; `None` = none (the thesis
+    /// scenes: no arithmetic is added, so their bits stay).
+    pub gravity: Option<Vector3<f64>>,
     /// A run stops with a divergence error when any `|w|` exceeds this [m].
     pub max_violation: f64,
     /// Length T of a cost measurement window.

@@ -41,11 +41,13 @@ use self::partition::partition;
 pub use self::partition::{DEFAULT_EXTRAPOLATE, DEFAULT_LINES_ABOVE, DEFAULT_TANK};
 use super::file::{
     ForceFile, IntegratorFile, MeasurementFile, OutputFile, ScenarioFile, SolverFile, SolverKind,
-    StabilizerFile, StabilizerKind, DEFAULT_CG_MAX_ITERATIONS, DEFAULT_CG_TOLERANCE,
+    StabilizerFile, StabilizerKind, TorqueFile, DEFAULT_CG_MAX_ITERATIONS, DEFAULT_CG_TOLERANCE,
     DEFAULT_MEASUREMENT_PERIOD, DEFAULT_PCG_MAX_ITERATIONS, DEFAULT_PCG_REFACTOR_EVERY,
     DEFAULT_PCG_TOLERANCE, DEFAULT_SMC_EPSILON, DEFAULT_SMC_K, DEFAULT_SMC_MU,
 };
-use super::model::{ForceSpec, Integrator, NetworkSpec, OutputSpec, Scenario, Solver, Stabilizer};
+use super::model::{
+    ForceSpec, Integrator, LoadAt, NetworkSpec, OutputSpec, Scenario, Solver, Stabilizer,
+};
 use crate::error::{Error, Result};
 use crate::kernel::SimTime;
 
@@ -260,13 +262,20 @@ pub fn validate(file: ScenarioFile) -> Result<Scenario> {
         links,
         body_model,
         ids,
-    } = model(&file.model, file.body_model)?;
-    let forces = file
+    } = model(&file.model, file.body_model, loads_needing_rotation(&file))?;
+    let mut forces = file
         .forces
         .iter()
         .enumerate()
         .map(|(i, f)| force(&format!("forces[{i}]"), f, &ids))
         .collect::<Result<Vec<_>>>()?;
+    for (i, t) in file.torques.iter().enumerate() {
+        forces.push(torque(&format!("torques[{i}]"), t, &ids)?);
+    }
+    let gravity = match file.model.gravity {
+        Some(g) => Some(magnitude_vector("model.gravity", g)?),
+        None => None,
+    };
     let max_violation = positive("divergence.max_violation", file.divergence.max_violation)?;
     let measurement_period = measurement(&file.measurement, dt, duration)?;
     let output = output(&file.output, &ids, bodies.len())?;
@@ -314,6 +323,7 @@ pub fn validate(file: ScenarioFile) -> Result<Scenario> {
         bodies,
         links,
         forces,
+        gravity,
         max_violation,
         measurement_period,
         output,
@@ -502,6 +512,38 @@ fn solver(s: &SolverFile) -> Result<Solver> {
     }
 }
 
+/// The first load field that turns a body (a force off the centre, a torque), with its
+/// value, for the body-model choice.
+fn loads_needing_rotation(file: &ScenarioFile) -> Option<(String, Vec<f64>)> {
+    let point = file.forces.iter().enumerate().find_map(|(i, f)| {
+        f.point
+            .filter(|p| *p != [0.0; 3])
+            .map(|p| (format!("forces[{i}].point"), p.to_vec()))
+    });
+    point.or_else(|| {
+        file.torques
+            .first()
+            .map(|t| ("torques[0].amplitude".to_string(), t.amplitude.to_vec()))
+    })
+}
+
+/// One entry of `torques`: the time function of a force, applied as a pure torque.
+fn torque(path: &str, t: &TorqueFile, ids: &Ids) -> Result<ForceSpec> {
+    let as_force = ForceFile {
+        body: t.body,
+        amplitude: t.amplitude,
+        omega: t.omega,
+        phase: t.phase,
+        from: t.from,
+        until: t.until,
+        ramp: t.ramp.clone(),
+        point: None,
+    };
+    let mut spec = force(path, &as_force, ids)?;
+    spec.applied = LoadAt::Torque;
+    Ok(spec)
+}
+
 /// One entry of `forces`: body resolved, times in nanoseconds.
 fn force(path: &str, f: &ForceFile, ids: &Ids) -> Result<ForceSpec> {
     let body = ids.index(&format!("{path}.body"), f.body)?;
@@ -531,6 +573,10 @@ fn force(path: &str, f: &ForceFile, ids: &Ids) -> Result<ForceSpec> {
         Some(r) => Some(controller::ramp(&format!("{path}.ramp"), r)?),
         None => None,
     };
+    let applied = match f.point {
+        Some(p) if p != [0.0; 3] => LoadAt::Point(magnitude_vector(&format!("{path}.point"), p)?),
+        _ => LoadAt::Centre,
+    };
     Ok(ForceSpec {
         body,
         amplitude,
@@ -539,6 +585,7 @@ fn force(path: &str, f: &ForceFile, ids: &Ids) -> Result<ForceSpec> {
         from,
         until,
         ramp,
+        applied,
     })
 }
 

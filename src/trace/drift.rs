@@ -41,6 +41,10 @@ struct Stretch {
 /// every step between them runs with no force at all. Stretches with fewer than one
 /// step are left out.
 pub fn undriven_stretches(scenario: &Scenario) -> Vec<(u64, u64)> {
+    // Gravity drives the net all the time.
+    if scenario.gravity.is_some() {
+        return Vec::new();
+    }
     let (dt, end) = (scenario.dt.0, scenario.duration.0);
     // Active intervals [from, until) in ns, sorted by start, empty ones dropped.
     let mut active: Vec<(u64, u64)> = scenario

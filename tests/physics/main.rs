@@ -8,6 +8,8 @@ use dsmcosim::scenario::{parse_str, Scenario};
 use nalgebra::{UnitQuaternion, Vector3};
 use serde_json::{json, Value};
 
+mod loads;
+
 fn scenario(v: Value) -> Scenario {
     parse_str(&v.to_string(), "<test>").unwrap_or_else(|e| panic!("scenario: {e}"))
 }

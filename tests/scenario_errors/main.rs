@@ -784,6 +784,7 @@ fn force(ids: Vec<u32>) -> impl Strategy<Value = ForceFile> {
             from: from as f64 / 10.0,
             until: length.map(|l| (from + l) as f64 / 10.0),
             ramp: None,
+            point: None,
         })
 }
 
@@ -990,8 +991,10 @@ fn scenario() -> impl Strategy<Value = ScenarioFile> {
                     grid: None,
                     bodies: Some(bodies),
                     links: Some(links),
+                    ..ModelFile::default()
                 },
                 forces,
+                torques: Vec::new(),
                 divergence: DivergenceFile { max_violation },
                 measurement: MeasurementFile {
                     period: explicit_period.then(|| secs(dt_ns * period_steps.min(steps))),
@@ -1037,6 +1040,7 @@ fn grid_files_survive_a_json_round_trip() {
             }),
             bodies: None,
             links: None,
+            ..ModelFile::default()
         },
         ..parse_file(&grid_base().to_string(), "grid.json").unwrap()
     };

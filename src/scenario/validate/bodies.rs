@@ -25,7 +25,14 @@ pub(super) struct Model {
 
 /// Validates `model` (exactly one of `grid` or `bodies` + `links`) and resolves
 /// `body_model`.
-pub(super) fn model(model: &ModelFile, choice: BodyModelFile) -> Result<Model> {
+///
+/// `loads` names the first load field that needs rotation (a force off the centre, a
+/// torque), if any: `auto` then chooses rigid bodies, and `point_mass` is refused.
+pub(super) fn model(
+    model: &ModelFile,
+    choice: BodyModelFile,
+    loads: Option<(String, Vec<f64>)>,
+) -> Result<Model> {
     // Expand a grid into the explicit form, so both kinds of model validate alike.
     let (body_files, link_files) = match (&model.grid, &model.bodies, &model.links) {
         (Some(g), None, None) => grid::expand(g, "model.grid")?,
@@ -72,7 +79,7 @@ pub(super) fn model(model: &ModelFile, choice: BodyModelFile) -> Result<Model> {
         .map(|(i, l)| link(&format!("model.links[{i}]"), l, &ids, &bodies))
         .collect::<Result<Vec<_>>>()?;
     no_duplicate_links(&links, &link_files)?;
-    let body_model = body_model(choice, &body_files, &link_files)?;
+    let body_model = body_model(choice, &body_files, &link_files, loads)?;
     Ok(Model {
         bodies,
         links,
@@ -248,9 +255,17 @@ fn link(path: &str, l: &LinkFile, ids: &Ids, bodies: &[BodySpec]) -> Result<Link
 }
 
 /// Resolves `body_model`; an explicit `"point_mass"` must not need rotation.
-fn body_model(choice: BodyModelFile, bodies: &[BodyFile], links: &[LinkFile]) -> Result<BodyModel> {
+fn body_model(
+    choice: BodyModelFile,
+    bodies: &[BodyFile],
+    links: &[LinkFile],
+    loads: Option<(String, Vec<f64>)>,
+) -> Result<BodyModel> {
     // The first field that makes rotation matter, if any.
     let needs_rotation = || -> Option<(String, Vec<f64>)> {
+        if let Some(load) = &loads {
+            return Some(load.clone());
+        }
         for (i, l) in links.iter().enumerate() {
             for (key, anchor) in [("anchor_a", l.anchor_a), ("anchor_b", l.anchor_b)] {
                 if anchor != [0.0; 3] {
