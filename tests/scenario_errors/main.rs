@@ -1255,7 +1255,11 @@ proptest! {
             }
             Err(e) => {
                 let m = e.to_string();
-                prop_assert!(m.starts_with(&format!("{name}:")), "{field} = {x}: {m}");
+                // A tiny mass can pass its own bound and still give a cube-default
+                // inertia below the inertia's: that refusal names the defaulted field.
+                let defaulted = name == "model.bodies[0].mass"
+                    && m.starts_with("model.bodies[0].inertia: the cube default");
+                prop_assert!(m.starts_with(&format!("{name}:")) || defaulted, "{field} = {x}: {m}");
             }
         }
     }
