@@ -107,14 +107,37 @@ impl std::fmt::Display for Divergence {
 pub enum Place {
     /// Link number k (1-based, file order), printed `link L<k>`.
     Link(usize),
+    /// Row `row` (0-based) of joint `joint` (1-based, file order), printed
+    /// `joint J<joint> row <row>`.
+    JointRow {
+        /// Joint number, 1-based.
+        joint: usize,
+        /// Row within the joint, 0-based.
+        row: usize,
+    },
     /// Body id, printed `body B<id>`.
     Body(u32),
+}
+
+impl Place {
+    /// The constraint row `l` (0-based, in the scenario's order: links, then joints'
+    /// rows).
+    pub fn row(scenario: &crate::scenario::Scenario, l: usize) -> Place {
+        match scenario.links[l].joint {
+            Some((j, r)) => Place::JointRow {
+                joint: j + 1,
+                row: r,
+            },
+            None => Place::Link(l + 1),
+        }
+    }
 }
 
 impl std::fmt::Display for Place {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Place::Link(k) => write!(f, "link L{k}"),
+            Place::JointRow { joint, row } => write!(f, "joint J{joint} row {row}"),
             Place::Body(id) => write!(f, "body B{id}"),
         }
     }

@@ -346,6 +346,9 @@ fn divergence(e: &Error) -> Value {
         Error::Diverged(d) => {
             let (link, body) = match d.place {
                 crate::error::Place::Link(k) => (Some(format!("L{k}")), None),
+                crate::error::Place::JointRow { joint, row } => {
+                    (Some(format!("J{joint}_{row}")), None)
+                }
                 crate::error::Place::Body(id) => (None, Some(format!("B{id}"))),
             };
             json!({"time": d.time.as_secs_f64(), "node": d.node, "link": link, "body": body, "what": d.what})

@@ -962,7 +962,7 @@ impl CoSim {
         Error::Diverged(Divergence {
             time: t,
             node: self.link_home[l].0 + 1,
-            place: Place::Link(l + 1),
+            place: Place::row(&self.scenario, l),
             what,
         })
     }
@@ -985,7 +985,7 @@ impl CoSim {
                 Error::Diverged(Divergence {
                     time: t,
                     node: node + 1,
-                    place: Place::Link(g + 1),
+                    place: Place::row(&self.scenario, g),
                     what: format!(
                         "non-finite kinematics (anchors of B{} and B{} coincide or the state is not finite)",
                         self.scenario.bodies[l.a].id, self.scenario.bodies[l.b].id

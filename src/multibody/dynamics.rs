@@ -15,9 +15,9 @@ use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 
 use super::solver::SolveError;
 use super::state::{Rates, State};
-use super::system::System;
+use super::system::{Link, System};
 use crate::kernel::SimTime;
-use crate::scenario::model::{LoadAt, Stabilizer};
+use crate::scenario::model::{LoadAt, RowKind, Stabilizer};
 
 /// Why a rate evaluation failed.
 #[derive(Debug, Clone, PartialEq)]
@@ -97,10 +97,11 @@ impl System {
                 out.z.fill(0.0);
             }
         }
+        let nb = state.p.len();
         out.p.copy_from_slice(&state.v);
-        out.v.copy_from_slice(&self.ws.acc);
+        out.v.copy_from_slice(&self.ws.acc[..nb]);
         if self.rigid {
-            out.omega.copy_from_slice(&self.ws.alpha);
+            out.omega.copy_from_slice(&self.ws.alpha[..nb]);
             for ((dq, q), w) in out.q.iter_mut().zip(&state.q).zip(&state.omega) {
                 *dq = Quaternion::from_imag(*w) * q * 0.5;
             }
@@ -129,7 +130,11 @@ impl System {
 
     /// Stage 2: external, held and gyroscopic loads.
     fn body_loads(&mut self, t: SimTime, state: &State) {
-        self.ws.force.copy_from_slice(&self.extra_force);
+        let nb = self.extra_force.len();
+        self.ws.force[..nb].copy_from_slice(&self.extra_force);
+        // The world's slot (rows held to the world), if any: nothing acts on it.
+        self.ws.force[nb..].fill(Vector3::zeros());
+        self.ws.torque[state.omega.len()..].fill(Vector3::zeros());
         if self.rigid {
             for i in 0..state.omega.len() {
                 let w = state.omega[i];
@@ -162,44 +167,31 @@ impl System {
         }
     }
 
-    /// Stage 3: per-link kinematics (and, under SMC, the current multipliers' forces).
+    /// Stage 3: per-row kinematics (and, under SMC, the current multipliers' forces).
     fn link_kinematics(&mut self, state: &State, smc: bool) -> Result<(), EvalError> {
-        for (l, link) in self.links.iter().enumerate() {
-            let (a, b) = (link.a, link.b);
-            let (mut delta, mut u) = (state.p[a] - state.p[b], state.v[a] - state.v[b]);
-            let (mut ra, mut rb) = (Vector3::zeros(), Vector3::zeros());
-            if self.rigid {
-                ra = UnitQuaternion::new_normalize(state.q[a]) * link.anchor_a;
-                rb = UnitQuaternion::new_normalize(state.q[b]) * link.anchor_b;
-                delta += ra - rb;
-                u += state.omega[a].cross(&ra) - state.omega[b].cross(&rb);
-            }
-            let d = delta.norm();
-            let n = delta / d;
-            let wd = n.dot(&u);
-            let mut jdv = (u.norm_squared() - wd * wd) / d;
-            if self.rigid {
-                let (wa, wb) = (state.omega[a], state.omega[b]);
-                jdv += n.dot(&(wa.cross(&wa.cross(&ra)) - wb.cross(&wb.cross(&rb))));
-                self.ws.ra[l] = ra;
-                self.ws.rb[l] = rb;
-                self.geo.ca[l] = ra.cross(&n);
-                self.geo.cb[l] = rb.cross(&n);
-            }
-            if !(d > 0.0 && jdv.is_finite() && wd.is_finite()) {
+        for l in 0..self.links.len() {
+            let (a, b) = self.geo.ends[l];
+            let row = row_kinematics(&self.links[l], state, self.rigid);
+            if !row.finite() {
                 return Err(EvalError::NonFinite { link: l });
             }
-            self.geo.n[l] = n;
-            self.ws.w[l] = d - link.length;
-            self.ws.wd[l] = wd;
-            self.ws.jdv[l] = jdv;
+            if self.rigid {
+                self.ws.ra[l] = row.ra;
+                self.ws.rb[l] = row.rb;
+                self.geo.ca[l] = row.ca;
+                self.geo.cb[l] = row.cb;
+            }
+            self.geo.n[l] = row.n;
+            self.ws.w[l] = row.w;
+            self.ws.wd[l] = row.wd;
+            self.ws.jdv[l] = row.jdv;
             if smc {
                 let z = state.z[l];
-                self.ws.force[a] += n * z;
-                self.ws.force[b] -= n * z;
+                self.ws.force[a] += row.n * z;
+                self.ws.force[b] -= row.n * z;
                 if self.rigid {
-                    self.ws.torque[a] += self.geo.ca[l] * z;
-                    self.ws.torque[b] -= self.geo.cb[l] * z;
+                    self.ws.torque[a] += row.ca * z;
+                    self.ws.torque[b] -= row.cb * z;
                 }
             }
         }
@@ -249,6 +241,123 @@ impl System {
                 let (ca, cb) = (self.geo.ca[l] * z, self.geo.cb[l] * z);
                 self.ws.alpha[a] += self.mass.inv_inertia[a] * ca;
                 self.ws.alpha[b] -= self.mass.inv_inertia[b] * cb;
+            }
+        }
+    }
+}
+
+/// One constraint row's value and Jacobian at a state: `J = [nᵀ, c_aᵀ]` on body `a`,
+/// `[−nᵀ, −c_bᵀ]` on body `b` (or the world), `w`, `ẇ = J v` and `J̇ v`.
+pub(crate) struct RowKinematics {
+    pub w: f64,
+    pub wd: f64,
+    pub jdv: f64,
+    pub n: Vector3<f64>,
+    pub ca: Vector3<f64>,
+    pub cb: Vector3<f64>,
+    /// World-frame anchor offsets `R r_a`, `R r_b` (zero on point masses and for the
+    /// world's side).
+    pub ra: Vector3<f64>,
+    pub rb: Vector3<f64>,
+    /// For a distance row: the anchors' distance `d` (1 for the other rows).
+    pub d: f64,
+}
+
+impl RowKinematics {
+    fn finite(&self) -> bool {
+        self.d > 0.0 && self.jdv.is_finite() && self.wd.is_finite()
+    }
+}
+
+/// The kinematics of `link` in `state` (see [`RowKind`]).
+pub(crate) fn row_kinematics(link: &Link, state: &State, rigid: bool) -> RowKinematics {
+    let (a, b) = (link.a, link.b);
+    let turn = |i: usize, r: &Vector3<f64>| UnitQuaternion::new_normalize(state.q[i]) * r;
+    let zero = Vector3::zeros();
+    // Side b: a body, or the world's fixed point.
+    let (pb, vb, wb, rb) = if link.world {
+        (link.anchor_b, zero, zero, zero)
+    } else if rigid {
+        (
+            state.p[b],
+            state.v[b],
+            state.omega[b],
+            turn(b, &link.anchor_b),
+        )
+    } else {
+        (state.p[b], state.v[b], zero, zero)
+    };
+    let (wa, ra) = if rigid {
+        (state.omega[a], turn(a, &link.anchor_a))
+    } else {
+        (zero, zero)
+    };
+    // In this order of operations (centres, then the anchors' offsets): a distance
+    // link's bits as they were before joints existed.
+    let (mut delta, mut u) = (state.p[a] - pb, state.v[a] - vb);
+    if rigid {
+        delta += ra - rb;
+        u += wa.cross(&ra) - wb.cross(&rb);
+    }
+    // The anchors' centripetal accelerations' difference (zero on point masses).
+    let spin = wa.cross(&wa.cross(&ra)) - wb.cross(&wb.cross(&rb));
+    match link.kind {
+        RowKind::Distance => {
+            let d = delta.norm();
+            let n = delta / d;
+            let wd = n.dot(&u);
+            let mut jdv = (u.norm_squared() - wd * wd) / d;
+            if rigid {
+                jdv += n.dot(&spin);
+            }
+            RowKinematics {
+                w: d - link.length,
+                wd,
+                jdv,
+                n,
+                ca: ra.cross(&n),
+                cb: rb.cross(&n),
+                ra,
+                rb,
+                d,
+            }
+        }
+        RowKind::Offset(k) => {
+            let mut n = zero;
+            n[k] = 1.0;
+            RowKinematics {
+                w: delta[k],
+                wd: u[k],
+                jdv: spin[k],
+                n,
+                ca: ra.cross(&n),
+                cb: rb.cross(&n),
+                ra,
+                rb,
+                d: 1.0,
+            }
+        }
+        RowKind::Align { u: ua, v: vb_body } => {
+            let uw = turn(a, &ua);
+            let vw = if link.world {
+                vb_body
+            } else {
+                turn(b, &vb_body)
+            };
+            let c = uw.cross(&vw);
+            let rel = wa - wb;
+            // d/dt of c with the bodies' ω held: what J̇ v adds.
+            let c_dot = wa.cross(&uw).cross(&vw) + uw.cross(&wb.cross(&vw));
+            RowKinematics {
+                w: uw.dot(&vw),
+                wd: rel.dot(&c),
+                jdv: rel.dot(&c_dot),
+                n: zero,
+                ca: c,
+                cb: c,
+                ra,
+                rb,
+                d: 1.0,
             }
         }
     }

@@ -5,7 +5,7 @@ use nalgebra::{Matrix3, Vector3};
 use super::solver::{Geometry, JsSolver, MassData, SolveError};
 use super::state::Rates;
 use crate::kernel::SimTime;
-use crate::scenario::model::{BodyModel, ForceSpec, Integrator, Scenario, Stabilizer};
+use crate::scenario::model::{BodyModel, ForceSpec, Integrator, RowKind, Scenario, Stabilizer};
 
 /// One distance link, with body indices resolved.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -18,8 +18,13 @@ pub struct Link {
     pub length: f64,
     /// Anchor on `a` in the body frame [m].
     pub anchor_a: Vector3<f64>,
-    /// Anchor on `b` in the body frame [m].
+    /// Anchor on `b` in the body frame [m]; on a world row, the fixed world point.
     pub anchor_b: Vector3<f64>,
+    /// What the row holds (a link: [`RowKind::Distance`]).
+    pub kind: RowKind,
+    /// Whether side `b` is the world: the solver sees it as the extra immovable body
+    /// [`System::world_body`], which has no state.
+    pub world: bool,
 }
 
 /// A multi-body system ready to integrate: model data, stabilizer, integrator and all
@@ -130,17 +135,30 @@ impl System {
                 length: l.length,
                 anchor_a: l.anchor_a,
                 anchor_b: l.anchor_b,
+                kind: l.kind,
+                world: l.world,
             })
             .collect();
-        let inv_mass: Vec<f64> = scenario.bodies.iter().map(|b| 1.0 / b.mass).collect();
+        let mut inv_mass: Vec<f64> = scenario.bodies.iter().map(|b| 1.0 / b.mass).collect();
         let inertia = scenario.bodies.iter().map(|b| b.inertia).collect();
         let nb = inv_mass.len();
+        // Rows held to the world end on one more body, immovable and stateless: the
+        // solver and the per-body accumulators see it (its `1/m` and `I⁻¹` are zero, so
+        // nothing moves it), the state does not.
+        let world = links.iter().any(|l| l.world);
+        let solver_bodies = nb + usize::from(world);
+        if world {
+            inv_mass.push(0.0);
+        }
         let nl = links.len();
-        let nr = if rigid { nb } else { 0 };
+        let nr = if rigid { solver_bodies } else { 0 };
         let nlr = if rigid { nl } else { 0 };
         let v3 = Vector3::zeros;
         let geo = Geometry {
-            ends: links.iter().map(|l| (l.a, l.b)).collect(),
+            ends: links
+                .iter()
+                .map(|l| (l.a, if l.world { nb } else { l.b }))
+                .collect(),
             n: vec![v3(); nl],
             ca: vec![v3(); nlr],
             cb: vec![v3(); nlr],
@@ -149,12 +167,12 @@ impl System {
             inv_mass,
             inv_inertia: vec![Matrix3::zeros(); nr],
         };
-        let solver = JsSolver::new(scenario.solver, nb, &geo.ends);
+        let solver = JsSolver::new(scenario.solver, solver_bodies, &geo.ends);
         let shape = super::state::State {
             p: vec![v3(); nb],
             v: vec![v3(); nb],
-            q: vec![nalgebra::Quaternion::identity(); nr],
-            omega: vec![v3(); nr],
+            q: vec![nalgebra::Quaternion::identity(); if rigid { nb } else { 0 }],
+            omega: vec![v3(); if rigid { nb } else { 0 }],
             z: vec![0.0; nl],
         };
         // Only RK4 uses the stages k2..k4 and the stage state; the Eulers' are left
@@ -184,14 +202,14 @@ impl System {
             integrator: scenario.integrator,
             dt: scenario.dt,
             extra_force: vec![v3(); nb],
-            extra_torque: vec![v3(); nr],
+            extra_torque: vec![v3(); if rigid { nb } else { 0 }],
             extra_rate: ExtraRate::default(),
             mass,
             geo,
             ws: Workspace {
-                force: vec![v3(); nb],
+                force: vec![v3(); solver_bodies],
                 torque: vec![v3(); nr],
-                acc: vec![v3(); nb],
+                acc: vec![v3(); solver_bodies],
                 alpha: vec![v3(); nr],
                 inertia_world: vec![Matrix3::zeros(); nr],
                 ra: vec![v3(); nlr],
@@ -306,7 +324,7 @@ impl System {
 
     /// Number of bodies.
     pub fn body_count(&self) -> usize {
-        self.mass.inv_mass.len()
+        self.extra_force.len()
     }
 
     /// Number of links.
@@ -379,6 +397,10 @@ impl System {
         body: usize,
     ) -> (Vector3<f64>, Vector3<f64>) {
         let link = &self.links[l];
+        if link.kind != RowKind::Distance || link.world {
+            let [f, t, _, _] = self.joint_row_load_on(state, l, body);
+            return (f, t);
+        }
         let anchor = |i: usize, r: &Vector3<f64>| {
             if self.rigid {
                 nalgebra::UnitQuaternion::new_normalize(state.q[i]) * r
@@ -416,6 +438,9 @@ impl System {
         body: usize,
     ) -> [Vector3<f64>; 4] {
         let link = &self.links[l];
+        if link.kind != RowKind::Distance || link.world {
+            return self.joint_row_load_on(state, l, body);
+        }
         let (mut ra, mut rb) = (Vector3::zeros(), Vector3::zeros());
         let (mut wa, mut wb) = (Vector3::zeros(), Vector3::zeros());
         if self.rigid {
@@ -447,6 +472,61 @@ impl System {
                 -rb.cross(&n) * z,
                 -f_dot,
                 -(wb.cross(&rb).cross(&f) + rb.cross(&f_dot)),
+            ]
+        }
+    }
+
+    /// [`link_load_and_rate_on`](Self::link_load_and_rate_on) for a joint's row or a
+    /// row held to the world: force `n z`, torque `c z` on `a` (`−n z`, `−c_b z` on `b`)
+    /// and their rates. An offset row's `n` is a fixed axis, so its force turns only
+    /// with `ż`; its lever `R r` turns with the body (`ċ = (ω × R r) × n`). An
+    /// alignment row has no force, and its `c = u × v` turns with both bodies.
+    fn joint_row_load_on(&self, state: &super::State, l: usize, body: usize) -> [Vector3<f64>; 4] {
+        let link = &self.links[l];
+        let row = super::dynamics::row_kinematics(link, state, self.rigid);
+        let (z, z_dot) = match self.stabilizer {
+            Stabilizer::Smc { .. } => (state.z[l], self.k[0].z.get(l).copied().unwrap_or(0.0)),
+            Stabilizer::Baumgarte { .. } => (self.ws.z_alg[l], 0.0),
+        };
+        let zero = Vector3::zeros();
+        let wa = if self.rigid {
+            state.omega[link.a]
+        } else {
+            zero
+        };
+        let wb = if self.rigid && !link.world {
+            state.omega[link.b]
+        } else {
+            zero
+        };
+        let c_dot = match link.kind {
+            RowKind::Align { u, v } => {
+                let turn = |i: usize, x: &Vector3<f64>| {
+                    nalgebra::UnitQuaternion::new_normalize(state.q[i]) * x
+                };
+                let uw = turn(link.a, &u);
+                let vw = if link.world { v } else { turn(link.b, &v) };
+                (wa.cross(&uw).cross(&vw) + uw.cross(&wb.cross(&vw)), None)
+            }
+            _ => (
+                wa.cross(&row.ra).cross(&row.n),
+                Some(wb.cross(&row.rb).cross(&row.n)),
+            ),
+        };
+        if body == link.a {
+            [
+                row.n * z,
+                row.ca * z,
+                row.n * z_dot,
+                c_dot.0 * z + row.ca * z_dot,
+            ]
+        } else {
+            let cb_dot = c_dot.1.unwrap_or(c_dot.0);
+            [
+                -row.n * z,
+                -row.cb * z,
+                -row.n * z_dot,
+                -(cb_dot * z + row.cb * z_dot),
             ]
         }
     }

@@ -125,6 +125,11 @@ impl LineSet {
         };
         for r in routes.iter().filter(|r| r.kind == DataKind::Force) {
             let Some(l) = r.link else { continue };
+            // A line is a distance link's wave model; a joint's rows stay in the
+            // constraint system under the scheme's other parts.
+            if scenario.links[l].kind != crate::scenario::model::RowKind::Distance {
+                continue;
+            }
             let state = routes.iter().find(|s| {
                 s.kind == DataKind::State && s.from == r.to && s.to == r.from && s.body == r.body
             });

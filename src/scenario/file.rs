@@ -325,6 +325,53 @@ pub struct ModelFile {
         skip_serializing_if = "Option::is_none"
     )]
     pub gravity: Option<[f64; 3]>,
+    /// Joints between two bodies or a body and the world (a pivot), in file order
+    /// (joint j is the j-th entry, 1-based); their rows follow the links'. Default none.
+    /// Joints turn their bodies: they need rigid bodies (`auto` chooses them).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub joints: Vec<JointFile>,
+}
+
+/// A joint type.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum JointTypeFile {
+    /// The bodies share the point `at` and turn freely about it (3 constraint rows).
+    Ball,
+    /// A ball joint that lets the bodies turn only about `axis` (5 rows).
+    Hinge,
+    /// The bodies move as one (6 rows).
+    Weld,
+}
+
+/// One entry of `model.joints`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct JointFile {
+    /// `"ball"`, `"hinge"` or `"weld"`.
+    #[serde(rename = "type")]
+    pub kind: JointTypeFile,
+    /// Id of body `a`.
+    pub a: u32,
+    /// Id of body `b` (not `a`); default none: `a` is joined to the world at `at`, a
+    /// fixed pivot.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub b: Option<u32>,
+    /// The joint's point in world coordinates at t = 0 [m]; required. Each body's
+    /// anchor is this point in its own frame, so the scene starts on the joint.
+    pub at: [f64; 3],
+    /// `hinge`: the axis the bodies turn about, a world direction at t = 0 (any
+    /// length but zero); required for a hinge, refused otherwise.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub axis: Option<[f64; 3]>,
 }
 
 /// `model.grid`: bodies on the z = 0 plane, linked to their 4-neighbours.

@@ -123,19 +123,85 @@ pub struct BodySpec {
     pub angular_velocity: Vector3<f64>,
 }
 
-/// One rigid distance link.
+/// One constraint row: a rigid distance link (the thesis's), or one row of a joint.
+///
+/// A joint is several rows between the same two bodies (or a body and the world), each
+/// a scalar `w` held at zero by the stabilizer like a link's: a ball joint is three
+/// [`RowKind::Offset`] rows, a hinge adds two [`RowKind::Align`] rows, a weld three.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct LinkSpec {
     /// Index (into [`Scenario::bodies`]) of body `a`.
     pub a: usize,
-    /// Index of body `b`.
+    /// Index of body `b`; equal to `a` when the row holds `a` to the world.
     pub b: usize,
-    /// Link length L [m].
+    /// Link length L [m] (distance rows; 0 for joint rows).
     pub length: f64,
     /// Anchor on body `a`, in the body frame [m].
     pub anchor_a: Vector3<f64>,
-    /// Anchor on body `b`, in the body frame [m].
+    /// Anchor on body `b`, in the body frame [m]; on a world row, the fixed world point.
     pub anchor_b: Vector3<f64>,
+    /// What the row holds.
+    pub kind: RowKind,
+    /// Whether side `b` is the world (fixed, immovable), not body `b`.
+    pub world: bool,
+    /// For a joint's row: the joint's index in `model.joints` and the row's index in
+    /// the joint (trace columns `w_J<joint+1>_<row>`); `None` for a link.
+    pub joint: Option<(usize, usize)>,
+}
+
+impl LinkSpec {
+    /// The row's name in trace.csv's columns and the plots: `L<k>` for link k
+    /// (`index` is the row's 0-based position), `J<j>_<r>` for row r (0-based) of joint
+    /// j (1-based).
+    pub fn name(&self, index: usize) -> String {
+        match self.joint {
+            Some((j, r)) => format!("J{}_{r}", j + 1),
+            None => format!("L{}", index + 1),
+        }
+    }
+}
+
+/// The scalar a constraint row holds at zero. With `d = P_a + R_a r_a − P_b − R_b r_b`
+/// the anchors' separation:
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+pub enum RowKind {
+    /// `w = |d| − L` [m]: a distance link.
+    #[default]
+    Distance,
+    /// `w = e_k · d` [m], `e_k` the k-th world axis (k = 0, 1, 2): one of a ball
+    /// joint's three rows, which together make the anchors coincide.
+    Offset(usize),
+    /// `w = (R_a u) · (R_b v)` [1] for body-frame unit vectors `u` on `a` and `v` on `b`
+    /// (on a world row `v` is a world vector): zero while they stay perpendicular. A
+    /// hinge keeps its axis `u` perpendicular to two vectors normal to the axis on `b`.
+    Align {
+        /// Unit vector in `a`'s frame.
+        u: Vector3<f64>,
+        /// Unit vector in `b`'s frame (world frame on a world row).
+        v: Vector3<f64>,
+    },
+}
+
+/// A joint type of `model.joints`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum JointType {
+    /// Anchors coincide (3 rows); the bodies turn freely about the point.
+    Ball,
+    /// A ball joint whose bodies turn only about one common axis (5 rows).
+    Hinge,
+    /// A ball joint whose bodies keep their relative orientation (6 rows).
+    Weld,
+}
+
+impl JointType {
+    /// Constraint rows the joint adds.
+    pub fn rows(self) -> usize {
+        match self {
+            JointType::Ball => 3,
+            JointType::Hinge => 5,
+            JointType::Weld => 6,
+        }
+    }
 }
 
 /// Where an external load acts on its body.

@@ -22,6 +22,7 @@ mod bodies;
 mod channels;
 pub(super) mod checks;
 mod controller;
+mod joints;
 mod network;
 mod partition;
 
@@ -36,17 +37,20 @@ use self::checks::{
     finite, foreign, magnitude, magnitude_vector, non_negative, num, positive, positive_magnitude,
     required, time, whole_nanos,
 };
+use self::joints::joint_rows;
+pub use self::joints::MAX_JOINTS;
 use self::network::{check_tdma, network};
 use self::partition::partition;
 pub use self::partition::{DEFAULT_EXTRAPOLATE, DEFAULT_LINES_ABOVE, DEFAULT_TANK};
 use super::file::{
-    ForceFile, IntegratorFile, MeasurementFile, OutputFile, ScenarioFile, SolverFile, SolverKind,
-    StabilizerFile, StabilizerKind, TorqueFile, DEFAULT_CG_MAX_ITERATIONS, DEFAULT_CG_TOLERANCE,
-    DEFAULT_MEASUREMENT_PERIOD, DEFAULT_PCG_MAX_ITERATIONS, DEFAULT_PCG_REFACTOR_EVERY,
-    DEFAULT_PCG_TOLERANCE, DEFAULT_SMC_EPSILON, DEFAULT_SMC_K, DEFAULT_SMC_MU,
+    BodyModelFile, ForceFile, IntegratorFile, MeasurementFile, OutputFile, ScenarioFile,
+    SolverFile, SolverKind, StabilizerFile, StabilizerKind, TorqueFile, DEFAULT_CG_MAX_ITERATIONS,
+    DEFAULT_CG_TOLERANCE, DEFAULT_MEASUREMENT_PERIOD, DEFAULT_PCG_MAX_ITERATIONS,
+    DEFAULT_PCG_REFACTOR_EVERY, DEFAULT_PCG_TOLERANCE, DEFAULT_SMC_EPSILON, DEFAULT_SMC_K,
+    DEFAULT_SMC_MU,
 };
 use super::model::{
-    ForceSpec, Integrator, LoadAt, NetworkSpec, OutputSpec, Scenario, Solver, Stabilizer,
+    BodyModel, ForceSpec, Integrator, LoadAt, NetworkSpec, OutputSpec, Scenario, Solver, Stabilizer,
 };
 use crate::error::{Error, Result};
 use crate::kernel::SimTime;
@@ -259,10 +263,21 @@ pub fn validate(file: ScenarioFile) -> Result<Scenario> {
 
     let Model {
         bodies,
-        links,
-        body_model,
+        mut links,
+        mut body_model,
         ids,
     } = model(&file.model, file.body_model, loads_needing_rotation(&file))?;
+    if !file.model.joints.is_empty() {
+        if file.body_model == BodyModelFile::PointMass {
+            return Err(Error::invalid(
+                "model.joints",
+                "joints turn their bodies: they need body_model \"rigid\" or \"auto\" \
+                 (got \"point_mass\")",
+            ));
+        }
+        body_model = BodyModel::Rigid;
+        links.extend(joint_rows(&file.model.joints, &ids, &bodies)?);
+    }
     let mut forces = file
         .forces
         .iter()

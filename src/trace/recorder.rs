@@ -38,6 +38,8 @@ pub const ROTATION_COLUMNS: [&str; 7] = ["qw", "qx", "qy", "qz", "wx", "wy", "wz
 pub struct Recorder {
     decimation: u64,
     link_count: usize,
+    /// Each row's name where the scene has joints (empty: links only, `L<k>`).
+    row_names: Vec<String>,
     trace_bodies: Vec<usize>,
     plot_bodies: Vec<(usize, u32)>,
     #[serde(skip)]
@@ -112,6 +114,14 @@ impl Recorder {
             &out.plot_bodies,
         );
         r.rotation = out.trace_rotation;
+        if scenario.links.iter().any(|l| l.joint.is_some()) {
+            r.row_names = scenario
+                .links
+                .iter()
+                .enumerate()
+                .map(|(k, l)| l.name(k))
+                .collect();
+        }
         r.invariants = InvariantLog::new(&undriven_stretches(scenario));
         r.layer = LayerWatch::new(scenario);
         if let Some(f) = file {
@@ -131,6 +141,7 @@ impl Recorder {
         Recorder {
             decimation: decimation.max(1),
             link_count,
+            row_names: Vec::new(),
             trace_bodies: trace_bodies.to_vec(),
             plot_bodies: plot_bodies.iter().map(|&i| (i, body_ids[i])).collect(),
             file: None,
@@ -160,15 +171,23 @@ impl Recorder {
         }
     }
 
+    /// Row `k`'s name (0-based): `L<k+1>`, or a joint row's `J<j>_<r>`.
+    fn row_name(&self, k: usize) -> String {
+        self.row_names
+            .get(k)
+            .cloned()
+            .unwrap_or_else(|| format!("L{}", k + 1))
+    }
+
     /// Writes the header to `file`, which the trace goes to from now on. `body_ids[i]`
     /// is the file id of body index `i`.
     fn start_file(&mut self, mut file: AtomicFile, body_ids: &[u32]) -> std::io::Result<()> {
         let mut head = String::from("t");
-        for k in 1..=self.link_count {
-            head.push_str(&format!(",w_L{k}"));
+        for k in 0..self.link_count {
+            head.push_str(&format!(",w_{}", self.row_name(k)));
         }
-        for k in 1..=self.link_count {
-            head.push_str(&format!(",f_L{k}"));
+        for k in 0..self.link_count {
+            head.push_str(&format!(",f_{}", self.row_name(k)));
         }
         for &i in &self.trace_bodies {
             let id = body_ids[i];
@@ -404,7 +423,7 @@ impl Recorder {
             let worst: Vec<String> = order
                 .iter()
                 .take(WORST_NAMED)
-                .map(|&k| format!("L{} {:.3} m", k + 1, self.link_peaks[k]))
+                .map(|&k| format!("{} {:.3} m", self.row_name(k), self.link_peaks[k]))
                 .collect();
             return vec![Series::new(
                 format!(
@@ -419,7 +438,7 @@ impl Recorder {
         p.peaks[..self.link_count]
             .iter()
             .enumerate()
-            .map(|(k, s)| Series::new(format!("L{}", k + 1), zip(&p.times, s)))
+            .map(|(k, s)| Series::new(self.row_name(k), zip(&p.times, s)))
             .collect()
     }
 

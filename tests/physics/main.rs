@@ -8,6 +8,7 @@ use dsmcosim::scenario::{parse_str, Scenario};
 use nalgebra::{UnitQuaternion, Vector3};
 use serde_json::{json, Value};
 
+mod joints;
 mod loads;
 
 fn scenario(v: Value) -> Scenario {

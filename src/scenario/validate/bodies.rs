@@ -9,7 +9,7 @@ use super::checks::{finite, num, positive, positive_magnitude, vec_str, vector, 
 use crate::error::{Error, Result};
 use crate::scenario::file::{BodyFile, BodyModelFile, LinkFile, ModelFile};
 use crate::scenario::grid;
-use crate::scenario::model::{BodyModel, BodySpec, LinkSpec};
+use crate::scenario::model::{BodyModel, BodySpec, LinkSpec, RowKind};
 
 /// The validated model section.
 pub(super) struct Model {
@@ -251,6 +251,9 @@ fn link(path: &str, l: &LinkFile, ids: &Ids, bodies: &[BodySpec]) -> Result<Link
         length,
         anchor_a,
         anchor_b,
+        kind: RowKind::Distance,
+        world: false,
+        joint: None,
     })
 }
 
