@@ -3,6 +3,7 @@
 //! under each scheme: `tests/cosim`; checkpoint/resume under each: `tests/checkpoint`).
 
 mod invariants;
+mod joints;
 
 use dsmcosim::cosim::{CoSim, Observer, StepValues};
 use dsmcosim::scenario::{parse_str, Scenario};
