@@ -87,7 +87,7 @@ if [ $studies -eq 1 ]; then
   study results/tradeoff/grid64_tight_1s tradeoff scenarios/grid64_tight.json --duration 1
   study results/stability stability-map scenarios/grid16_monolithic.json --duration 12
   study results/coupling coupling scenarios/grid16_space_fixed.json
-  for m in scenarios/mechanisms/*.json; do
+  for m in scenarios/mechanisms/*.json scenarios/hanging_chain.json; do
     study "results/coupling/mechanisms/$(basename "$m" .json)" coupling "$m"
   done
   # The D_s sweeps (results/README.md, "Does optimizing pay?"): rerun from scratch; the

@@ -26,12 +26,14 @@
 //! is chaotic, and over 30 s every stable scheme (latency 0 included) ends metres away
 //! from the monolithic run, so a long-horizon error measures the chaos, not the
 //! coupling. Energy drift is the relative change of the kinetic energy
-//! (translation and rotation, `trace::Invariants`) over the undriven tail (from the
+//! (translation and rotation, `trace::Invariants`; under gravity the change of kinetic
+//! plus potential energy relative to the kinetic energy) over the undriven tail (from the
 //! last force's switch-off to the end, or the whole run when the scene has no force,
 //! when that tail is at least 1 s long); momentum drift the change of the total linear
 //! momentum over the same tail [kg·m/s], angular-momentum drift the relative change of
 //! the angular momentum about the centre of mass (both kept to round-off by the
-//! monolithic run, which the markdown shows beside them). The fitted order in τ is the
+//! monolithic run, which the markdown shows beside them; not reported where the world
+//! acts on the net, through gravity or a joint to a world point). The fitted order in τ is the
 //! least-squares slope of log(error vs τ = dt) against log τ over a row's bounded
 //! cells. Cost per step is the wall time of the cell
 //! divided by that of `reset` at the same τ and distribution (each the fastest of
@@ -126,13 +128,22 @@ struct Watch {
     positions: Vec<[Vector3<f64>; 2]>,
     /// Start of the undriven tail [ns], if the scene has one.
     tail: Option<u64>,
+    /// Energy at the tail's start and at the end [J] (kinetic; under gravity kinetic
+    /// plus potential).
     ke_tail_start: f64,
     ke_end: f64,
+    /// Kinetic energy at the tail's start [J]: the scale of the energy drift.
+    kinetic_tail_start: f64,
     /// Momentum and angular momentum about the centre of mass at the tail's start and
     /// at the end.
     momenta_tail_start: [Vector3<f64>; 2],
     momenta_end: [Vector3<f64>; 2],
     max_w: f64,
+    /// Gravity, whose potential joins the energy; `None` without.
+    gravity: Option<Vector3<f64>>,
+    /// Whether the world acts on the net (gravity, a joint to a world point): its
+    /// momenta then change by physics, and their drifts are not reported.
+    external: bool,
 }
 
 impl Watch {
@@ -157,9 +168,12 @@ impl Watch {
             tail,
             ke_tail_start: f64::NAN,
             ke_end: f64::NAN,
+            kinetic_tail_start: f64::NAN,
             momenta_tail_start: [Vector3::repeat(f64::NAN); 2],
             momenta_end: [Vector3::repeat(f64::NAN); 2],
             max_w: 0.0,
+            gravity: s.gravity,
+            external: s.gravity.is_some() || s.links.iter().any(|l| l.world),
         }
     }
 }
@@ -173,11 +187,28 @@ impl Observer for Watch {
         }
         if Some(t) == self.tail || s.last {
             let inv = s.invariants();
-            let momenta = [inv.momentum, inv.angular_momentum];
-            if s.last {
-                (self.ke_end, self.momenta_end) = (inv.kinetic_energy, momenta);
+            let momenta = if self.external {
+                [Vector3::repeat(f64::NAN); 2]
             } else {
-                (self.ke_tail_start, self.momenta_tail_start) = (inv.kinetic_energy, momenta);
+                [inv.momentum, inv.angular_momentum]
+            };
+            // Under gravity the energy kept is kinetic plus potential, `−Σ m g·p`.
+            let energy = match self.gravity {
+                Some(g) => {
+                    let potential: f64 =
+                        s.p.iter()
+                            .zip(s.bodies)
+                            .map(|(p, b)| -b.mass * g.dot(p))
+                            .sum();
+                    inv.kinetic_energy + potential
+                }
+                None => inv.kinetic_energy,
+            };
+            if s.last {
+                (self.ke_end, self.momenta_end) = (energy, momenta);
+            } else {
+                (self.ke_tail_start, self.momenta_tail_start) = (energy, momenta);
+                self.kinetic_tail_start = inv.kinetic_energy;
             }
         }
         for w in s.w {
@@ -358,7 +389,7 @@ pub fn study(
         for (s, &tau) in scenarios.iter().zip(&TAUS) {
             let r = run(s);
             tick(&mut done);
-            let drift = (r.watch.ke_end - r.watch.ke_tail_start) / r.watch.ke_tail_start;
+            let drift = (r.watch.ke_end - r.watch.ke_tail_start) / r.watch.kinetic_tail_start;
             let [p0, l0] = r.watch.momenta_tail_start;
             let [p1, l1] = r.watch.momenta_end;
             let ok = r.error.is_none();
@@ -383,7 +414,7 @@ pub fn study(
     }
     create_out_dir(out)?;
     write_csv(out, &cells)?;
-    let mono_drift = (mono.watch.ke_end - mono.watch.ke_tail_start) / mono.watch.ke_tail_start;
+    let mono_drift = (mono.watch.ke_end - mono.watch.ke_tail_start) / mono.watch.kinetic_tail_start;
     let [p0, l0] = mono.watch.momenta_tail_start;
     let [p1, l1] = mono.watch.momenta_end;
     let reference = format!(

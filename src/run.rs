@@ -545,18 +545,27 @@ fn write_plots(out: &Path, world: &CoSim, rec: &Recorder) -> Result<()> {
     let time = "time t [s]";
     // Up to 6 links one line each; more as their envelope plus the worst few.
     let links = rec.constraint_series();
+    // A scene with joints has rows (a joint's are in m or, for its alignments, in
+    // units of the cosine they hold at zero), not only links.
+    let joints = world.scenario().links.iter().any(|l| l.joint.is_some());
+    let noun = if joints { "constraint rows" } else { "links" };
     let what = if links.len() > envelope::FEW {
-        format!("constraint values of {} links", links.len())
+        format!("constraint values of {} {noun}", links.len())
     } else {
         "constraint values".to_string()
+    };
+    let axis = if joints {
+        "constraint value w [m; alignment rows: 1]"
+    } else {
+        "constraint value w [m]"
     };
     plot(
         out,
         "constraints.svg",
         &title(&what),
         time,
-        "constraint value w [m]",
-        &envelope::summarize(&links, "links", WORST_LINKS),
+        axis,
+        &envelope::summarize(&links, noun, WORST_LINKS),
         false,
     )?;
     plot(

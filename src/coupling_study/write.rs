@@ -76,9 +76,10 @@ pub(super) fn write_markdown(
     let mut text = format!(
         "# Coupling study of {name}\n\nEach sample arrives τ late (latency = τ). Errors: RMS \
          over 0–3 s of the position error of the first and last body (the larger). \
-         Over the undriven tail: energy drift (relative change of kinetic energy, signed), \
+         Over the undriven tail: energy drift (relative change of kinetic energy, signed; \
+         under gravity the change of kinetic plus potential energy relative to the kinetic), \
          momentum drift (|ΔP| [kg·m/s]) and angular-momentum drift (|ΔL|/|L|, about the \
-         centre of mass). Cost: wall time per step relative to `reset` at the same τ. \
+         centre of mass; – where gravity or a joint to a world point acts on the net). Cost: wall time per step relative to `reset` at the same τ. \
          {reference}\n\n\
          | scheme | distribution | τ [ms] | bounded | max \\|w\\| [m] | err vs monolithic [m] \
          | err vs τ = dt [m] | energy drift | momentum drift | angular-momentum drift \
