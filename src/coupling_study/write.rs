@@ -224,8 +224,8 @@ pub(super) fn write_plots(out: &Path, name: &str, cells: &[Cell]) -> Result<()> 
     )?;
     plot(
         "energy_vs_tau.svg",
-        "kinetic energy drift over the undriven tail",
-        "relative change of kinetic energy, undriven tail [1]",
+        "energy drift over the undriven tail",
+        "relative energy change (kinetic; with gravity + potential) [1]",
         Scale::Linear,
         &series(&|c| c.energy_drift),
     )
