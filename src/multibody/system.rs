@@ -22,9 +22,11 @@ pub struct Link {
     pub anchor_b: Vector3<f64>,
     /// What the row holds (a link: [`RowKind::Distance`]).
     pub kind: RowKind,
-    /// Whether side `b` is the world: the solver sees it as the extra immovable body
-    /// [`System::world_body`], which has no state.
+    /// Whether side `b` is the world: the solver sees it as one more body, immovable
+    /// and without state.
     pub world: bool,
+    /// For a joint's row: (joint, row), as [`crate::scenario::model::LinkSpec::joint`].
+    pub joint: Option<(usize, usize)>,
 }
 
 /// A multi-body system ready to integrate: model data, stabilizer, integrator and all
@@ -137,6 +139,7 @@ impl System {
                 anchor_b: l.anchor_b,
                 kind: l.kind,
                 world: l.world,
+                joint: l.joint,
             })
             .collect();
         let mut inv_mass: Vec<f64> = scenario.bodies.iter().map(|b| 1.0 / b.mass).collect();

@@ -57,12 +57,18 @@ impl Layout {
         for (l, link) in s.links.iter().enumerate() {
             let owner = link_owner[l];
             links[owner].push(l);
+            // A joint's rows share their bodies and owner: its force crosses as one
+            // message, on the route of its first row (see `Node::force_payload`).
+            let later_row = link.joint.is_some_and(|(_, r)| r > 0);
             for body in [link.a, link.b] {
                 let body_node = node_of[body];
                 if body_node == owner {
                     continue;
                 }
                 ghosts[owner].push(body);
+                if later_row {
+                    continue;
+                }
                 routes.push(Route {
                     kind: DataKind::Force,
                     from: owner,

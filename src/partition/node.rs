@@ -344,12 +344,29 @@ impl Node {
     pub fn force_payload(&self, l: usize, g: usize) -> Payload {
         let ll = self.links.iter().position(|&x| x == l).unwrap_or_default();
         let body = self.local_body[&g];
-        let [force, torque, force_rate, torque_rate] = if self.coupling.scheme.predicts() {
-            self.system.link_load_and_rate_on(&self.state, ll, body)
-        } else {
-            let (f, t) = self.system.link_load_on(&self.state, ll, body);
-            [f, t, Vector3::zeros(), Vector3::zeros()]
+        let load = |ll: usize| {
+            if self.coupling.scheme.predicts() {
+                self.system.link_load_and_rate_on(&self.state, ll, body)
+            } else {
+                let (f, t) = self.system.link_load_on(&self.state, ll, body);
+                [f, t, Vector3::zeros(), Vector3::zeros()]
+            }
         };
+        let [mut force, mut torque, mut force_rate, mut torque_rate] = load(ll);
+        // A joint's force is the sum of its rows' (consecutive here, as in the file):
+        // one message for the whole joint.
+        if let Some(joint) = self.system.links()[ll].joint {
+            for next in ll + 1..self.links.len() {
+                if self.system.links()[next].joint.map(|j| j.0) != Some(joint.0) {
+                    break;
+                }
+                let [f, t, fr, tr] = load(next);
+                force += f;
+                torque += t;
+                force_rate += fr;
+                torque_rate += tr;
+            }
+        }
         Payload::Force {
             link: l,
             body: g,

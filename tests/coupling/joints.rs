@@ -159,3 +159,28 @@ fn a_translating_pair_on_a_border_joint_stays_rigid_in_any_frame() {
         );
     }
 }
+
+/// A border joint's rows cross as one force message: one force route per border
+/// joint, not one per row, and refusing an owner override of a joint's row.
+#[test]
+fn a_border_joint_crosses_as_one_message() {
+    let s = scenario(&double_pendulum(Some(("predict", 0.005))));
+    let layout = dsmcosim::partition::Layout::new(&s);
+    let forces: Vec<_> = layout
+        .routes
+        .iter()
+        .filter(|r| r.kind == dsmcosim::scenario::model::DataKind::Force)
+        .collect();
+    // Joint 2 (rows 3, 4, 5) joins rod 1 (node 1) to rod 2 (node 2).
+    assert_eq!(forces.len(), 1, "{forces:?}");
+    assert_eq!(forces[0].link, Some(3));
+    let mut v = double_pendulum(Some(("predict", 0.005)));
+    v["partition"]["link_owners"] = json!([{"link": 4, "node": 2}]);
+    let e = dsmcosim::scenario::parse_str(&v.to_string(), "<t>")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("partition.link_owners[0].link: 4 is a row of joint J2"),
+        "{e}"
+    );
+}

@@ -365,3 +365,63 @@ fn a_weld_makes_two_bodies_turn_as_one() {
     });
     assert!(turned > 3.0, "the pair turned only {turned} rad");
 }
+
+/// Bad joints are refused naming the field and what is wrong.
+#[test]
+fn bad_joints_are_refused_naming_the_field() {
+    let refusal = |joint: Value, extra: Option<(&str, Value)>| -> String {
+        let mut v = json!({
+            "name": "x", "seed": 1, "duration": 1.0, "dt": 0.01,
+            "model": {"bodies": [{"id": 1, "mass": 1.0, "size": 0.1, "position": [1, 0, 0]},
+                                 {"id": 2, "mass": 1.0, "size": 0.1, "position": [2, 0, 0]}],
+                      "joints": [joint]}
+        });
+        if let Some((k, x)) = extra {
+            v[k] = x;
+        }
+        dsmcosim::scenario::parse_str(&v.to_string(), "<test>")
+            .unwrap_err()
+            .to_string()
+    };
+    let cases = [
+        (
+            json!({"type": "ball", "a": 7, "at": [0, 0, 0]}),
+            None,
+            "model.joints[0].a: no body with id 7",
+        ),
+        (
+            json!({"type": "ball", "a": 1, "b": 1, "at": [0, 0, 0]}),
+            None,
+            "model.joints[0].b: a joint cannot join body 1 to itself",
+        ),
+        (
+            json!({"type": "hinge", "a": 1, "at": [0, 0, 0]}),
+            None,
+            "model.joints[0].axis: a hinge needs",
+        ),
+        (
+            json!({"type": "hinge", "a": 1, "at": [0, 0, 0], "axis": [0, 0, 0]}),
+            None,
+            "model.joints[0].axis: must not be zero",
+        ),
+        (
+            json!({"type": "ball", "a": 1, "at": [0, 0, 0], "axis": [0, 0, 1]}),
+            None,
+            "model.joints[0].axis: only a hinge",
+        ),
+        (
+            json!({"type": "slider", "a": 1, "at": [0, 0, 0]}),
+            None,
+            "model.joints[0].type",
+        ),
+        (
+            json!({"type": "ball", "a": 1, "at": [0, 0, 0]}),
+            Some(("body_model", json!("point_mass"))),
+            "model.joints: joints turn their bodies",
+        ),
+    ];
+    for (joint, extra, want) in cases {
+        let e = refusal(joint.clone(), extra);
+        assert!(e.starts_with(want), "{joint}: {e}");
+    }
+}

@@ -311,6 +311,18 @@ fn overrides(
             ));
         }
         let l = &links[k - 1];
+        if let Some((j, _)) = l.joint {
+            // A joint's rows travel as one message from one owner.
+            return Err(Error::invalid(
+                format!("{path}.link"),
+                format!(
+                    "{k} is a row of joint J{} (links are numbered 1 to {}); a joint is \
+                     owned by the general rule",
+                    j + 1,
+                    links.iter().filter(|l| l.joint.is_none()).count()
+                ),
+            ));
+        }
         let (a, b) = (node_of[l.a], node_of[l.b]);
         let ends = format!("bodies {}–{}", bodies[l.a].id, bodies[l.b].id);
         if a == b {
