@@ -217,6 +217,24 @@ fn tdma_run_with_drift_and_jitter_resumes_bit_for_bit() {
 }
 
 #[test]
+fn joints_under_gravity_resume_bit_for_bit() {
+    // The crane: a hinge to the world, a border ball joint on TDMA, a torque, gravity.
+    let mut v = shipped("crane");
+    v["duration"] = json!(3.0);
+    check_resume("crane", &v, 0.5023, 5);
+    // The hanging chain: ten ball joints, a border joint under `predict` and under the
+    // default coupling.
+    let mut v = shipped("hanging_chain");
+    v["duration"] = json!(2.0);
+    check_resume("hanging_chain", &v, 0.5035, 3);
+    v["partition"]
+        .as_object_mut()
+        .expect("partition")
+        .remove("coupling");
+    check_resume("hanging_chain_default", &v, 0.5035, 3);
+}
+
+#[test]
 fn controlled_tdma_run_resumes_with_its_pending_lists() {
     let mut v = shipped("tdma4_space_cp");
     v["duration"] = json!(4.0);
