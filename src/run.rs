@@ -577,6 +577,18 @@ fn write_plots(out: &Path, world: &CoSim, rec: &Recorder) -> Result<()> {
         &rec.body_series(),
         false,
     )?;
+    let spins = rec.angular_velocity_series();
+    if !spins.is_empty() {
+        plot(
+            out,
+            "angular_velocity.svg",
+            &title("angular velocity of the plotted bodies (world frame)"),
+            time,
+            "angular velocity [rad/s]",
+            &spins,
+            false,
+        )?;
+    }
     let epochs = world.epochs();
     // Step plots: each window's value from its start, and the last one held to its end.
     let per_epoch = |label: String, f: &dyn Fn(&crate::cosim::EpochRecord) -> f64| {
@@ -743,5 +755,46 @@ mod tests {
         let want: Vec<String> = (1..=links).map(|k| format!("L{k}")).collect();
         assert_eq!(names, want);
         assert!(!svg.contains("RMS of"));
+    }
+
+    /// With `output.trace_rotation`, a spinning pendulum's run draws the plotted bodies'
+    /// angular velocities (labelled axis and legend); without it, no such plot. The
+    /// constraint plot names a joint's rows.
+    #[test]
+    fn rotation_is_plotted_when_traced() {
+        let scene = |rotation: bool| {
+            serde_json::json!({
+                "name": format!("spin_plot_{rotation}"), "seed": 1, "duration": 0.5, "dt": 0.001,
+                "integrator": "rk4",
+                "model": {"gravity": [0, 0, -9.81],
+                          "bodies": [{"id": 4, "mass": 1.0, "size": 0.2, "position": [1, 0, 0],
+                                      "angular_velocity": [0, 0, 2]}],
+                          "joints": [{"type": "hinge", "a": 4, "at": [0, 0, 0], "axis": [0, 1, 0]}]},
+                "output": {"decimation": 10, "trace_rotation": rotation}
+            })
+        };
+        for rotation in [true, false] {
+            let v = scene(rotation);
+            let scenario = crate::scenario::parse_str(&v.to_string(), "spin").unwrap();
+            let dir = tempfile::tempdir().unwrap();
+            run(&scenario, dir.path()).unwrap();
+            let plot = dir.path().join("angular_velocity.svg");
+            assert_eq!(plot.exists(), rotation);
+            let constraints = std::fs::read_to_string(dir.path().join("constraints.svg")).unwrap();
+            let names = texts(&constraints);
+            assert!(names.iter().any(|t| t.2 == "J1_4"), "{names:?}");
+            if rotation {
+                let svg = std::fs::read_to_string(plot).unwrap();
+                let t = texts(&svg);
+                for want in [
+                    "angular velocity [rad/s]",
+                    "ωx of B4",
+                    "ωy of B4",
+                    "ωz of B4",
+                ] {
+                    assert!(t.iter().any(|x| x.2 == want), "{want} missing: {t:?}");
+                }
+            }
+        }
     }
 }

@@ -54,6 +54,7 @@ pub const OUTPUTS: &[&str] = &[
 pub const PLOTS: &[&str] = &[
     "constraints.svg",
     "bodies.svg",
+    "angular_velocity.svg",
     "cost.svg",
     "delays.svg",
     "bandwidth.svg",

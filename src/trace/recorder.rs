@@ -114,6 +114,10 @@ impl Recorder {
             &out.plot_bodies,
         );
         r.rotation = out.trace_rotation;
+        if r.rotation {
+            // The plotted bodies' angular velocities besides their coordinates.
+            r.plots = PlotSamples::new(r.plots.peaks.len(), 6 * r.plot_bodies.len());
+        }
         if scenario.links.iter().any(|l| l.joint.is_some()) {
             r.row_names = scenario
                 .links
@@ -245,10 +249,17 @@ impl Recorder {
         }
         self.rows += 1;
         let t = s.time.as_secs_f64();
+        let omega = |i: usize, ax: usize| s.omega.get(i).map_or(0.0, |w| w[ax]);
+        let spins = self
+            .plot_bodies
+            .iter()
+            .filter(|_| self.rotation)
+            .flat_map(|&(i, _)| (0..3).map(move |ax| omega(i, ax)));
         let bodies = self
             .plot_bodies
             .iter()
-            .flat_map(|&(i, _)| (0..3).map(move |ax| s.p[i][ax]));
+            .flat_map(|&(i, _)| (0..3).map(move |ax| s.p[i][ax]))
+            .chain(spins);
         if self.link_peaks.is_empty() {
             let envelope = s.w.iter().fold(0.0, |m: f64, w| m.max(w.abs()));
             let links = s.w.iter().copied();
@@ -448,6 +459,23 @@ impl Recorder {
         let p = &self.plots;
         for (series, &(_, id)) in p.firsts.chunks(3).zip(&self.plot_bodies) {
             for (ax, s) in ["x", "y", "z"].iter().zip(series) {
+                out.push(Series::new(format!("{ax} of B{id}"), zip(&p.times, s)));
+            }
+        }
+        out
+    }
+
+    /// Series for the angular-velocity plot (with `output.trace_rotation`): ωx, ωy, ωz
+    /// of each plotted body in the world frame; empty without.
+    pub fn angular_velocity_series(&self) -> Vec<Series> {
+        let p = &self.plots;
+        let n = self.plot_bodies.len();
+        if !self.rotation || p.firsts.len() < 6 * n {
+            return Vec::new();
+        }
+        let mut out = Vec::new();
+        for (series, &(_, id)) in p.firsts[3 * n..].chunks(3).zip(&self.plot_bodies) {
+            for (ax, s) in ["ωx", "ωy", "ωz"].iter().zip(series) {
                 out.push(Series::new(format!("{ax} of B{id}"), zip(&p.times, s)));
             }
         }
