@@ -125,8 +125,8 @@ impl Place {
     pub fn row(scenario: &crate::scenario::Scenario, l: usize) -> Place {
         match scenario.links[l].joint {
             Some((j, r)) => Place::JointRow {
-                joint: j + 1,
-                row: r,
+                joint: j as usize + 1,
+                row: r as usize,
             },
             None => Place::Link(l + 1),
         }

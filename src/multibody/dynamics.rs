@@ -301,7 +301,7 @@ pub(crate) fn row_kinematics(link: &Link, state: &State, rigid: bool) -> RowKine
     }
     // The anchors' centripetal accelerations' difference (zero on point masses).
     let spin = wa.cross(&wa.cross(&ra)) - wb.cross(&wb.cross(&rb));
-    match link.kind {
+    match &link.kind {
         RowKind::Distance => {
             let d = delta.norm();
             let n = delta / d;
@@ -323,6 +323,7 @@ pub(crate) fn row_kinematics(link: &Link, state: &State, rigid: bool) -> RowKine
             }
         }
         RowKind::Offset(k) => {
+            let k = usize::from(*k);
             let mut n = zero;
             n[k] = 1.0;
             RowKinematics {
@@ -337,7 +338,8 @@ pub(crate) fn row_kinematics(link: &Link, state: &State, rigid: bool) -> RowKine
                 d: 1.0,
             }
         }
-        RowKind::Align { u: ua, v: vb_body } => {
+        RowKind::Align(axes) => {
+            let (ua, vb_body) = (axes.u, axes.v);
             let uw = turn(a, &ua);
             let vw = if link.world {
                 vb_body

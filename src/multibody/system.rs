@@ -26,7 +26,7 @@ pub struct Link {
     /// and without state.
     pub world: bool,
     /// For a joint's row: (joint, row), as [`crate::scenario::model::LinkSpec::joint`].
-    pub joint: Option<(usize, usize)>,
+    pub joint: Option<(u32, u32)>,
 }
 
 /// A multi-body system ready to integrate: model data, stabilizer, integrator and all
@@ -137,7 +137,7 @@ impl System {
                 length: l.length,
                 anchor_a: l.anchor_a,
                 anchor_b: l.anchor_b,
-                kind: l.kind,
+                kind: l.kind.clone(),
                 world: l.world,
                 joint: l.joint,
             })
@@ -502,8 +502,9 @@ impl System {
         } else {
             zero
         };
-        let c_dot = match link.kind {
-            RowKind::Align { u, v } => {
+        let c_dot = match &link.kind {
+            RowKind::Align(axes) => {
+                let (u, v) = (axes.u, axes.v);
                 let turn = |i: usize, x: &Vector3<f64>| {
                     nalgebra::UnitQuaternion::new_normalize(state.q[i]) * x
                 };

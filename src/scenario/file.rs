@@ -107,9 +107,11 @@ pub struct ScenarioFile {
     /// External forces; default none.
     #[serde(default)]
     pub forces: Vec<ForceFile>,
-    /// External torques (world frame); default none. Needs rigid bodies.
+    /// External torques: entries of the same form as `forces`, the amplitude a torque
+    /// [N·m] in the world frame about the body's centre (`point` is refused); default
+    /// none. Needs rigid bodies.
     #[serde(default)]
-    pub torques: Vec<TorqueFile>,
+    pub torques: Vec<ForceFile>,
     /// Divergence bound; default `max_violation` 1 m.
     #[serde(default)]
     pub divergence: DivergenceFile,
@@ -453,7 +455,7 @@ pub struct LinkFile {
 pub struct ForceFile {
     /// Id of the driven body.
     pub body: u32,
-    /// Amplitude vector [N]; required.
+    /// Amplitude vector [N] (in `torques`, [N·m]); required.
     pub amplitude: [f64; 3],
     /// Angular frequency ω [rad/s]; default 0 (with `phase` = π/2, a constant push).
     #[serde(default)]
@@ -486,41 +488,6 @@ pub struct ForceFile {
         skip_serializing_if = "Option::is_none"
     )]
     pub point: Option<[f64; 3]>,
-}
-
-/// One entry of `torques`: `amplitude · sin(omega · t + phase)` [N·m] about the body's
-/// centre, in the world frame, for `from ≤ t < until`; the same time function as a
-/// force's.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct TorqueFile {
-    /// Id of the driven body.
-    pub body: u32,
-    /// Amplitude vector [N·m]; required.
-    pub amplitude: [f64; 3],
-    /// Angular frequency ω [rad/s]; default 0 (with `phase` = π/2, a constant torque).
-    #[serde(default)]
-    pub omega: f64,
-    /// Phase φ [rad]; default 0.
-    #[serde(default)]
-    pub phase: f64,
-    /// Switch-on time [s], ≥ 0, inclusive; default 0.
-    #[serde(default)]
-    pub from: f64,
-    /// Switch-off time [s], ≥ `from`, exclusive; default never.
-    #[serde(
-        default,
-        deserialize_with = "present",
-        skip_serializing_if = "Option::is_none"
-    )]
-    pub until: Option<f64>,
-    /// Linear amplitude envelope; default none (scale 1).
-    #[serde(
-        default,
-        deserialize_with = "present",
-        skip_serializing_if = "Option::is_none"
-    )]
-    pub ramp: Option<RampFile>,
 }
 
 /// `forces[].ramp`: the amplitude is scaled by `a0` until `t0`, by `a1` from `t1`, and

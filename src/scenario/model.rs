@@ -146,7 +146,7 @@ pub struct LinkSpec {
     pub world: bool,
     /// For a joint's row: the joint's index in `model.joints` and the row's index in
     /// the joint (trace columns `w_J<joint+1>_<row>`); `None` for a link.
-    pub joint: Option<(usize, usize)>,
+    pub joint: Option<(u32, u32)>,
 }
 
 impl LinkSpec {
@@ -163,23 +163,30 @@ impl LinkSpec {
 
 /// The scalar a constraint row holds at zero. With `d = P_a + R_a r_a − P_b − R_b r_b`
 /// the anchors' separation:
-#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+///
+/// 16 bytes: an alignment's two vectors sit behind a box, as every link of a
+/// million-body grid carries a `RowKind`.
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub enum RowKind {
     /// `w = |d| − L` [m]: a distance link.
     #[default]
     Distance,
     /// `w = e_k · d` [m], `e_k` the k-th world axis (k = 0, 1, 2): one of a ball
     /// joint's three rows, which together make the anchors coincide.
-    Offset(usize),
+    Offset(u8),
     /// `w = (R_a u) · (R_b v)` [1] for body-frame unit vectors `u` on `a` and `v` on `b`
     /// (on a world row `v` is a world vector): zero while they stay perpendicular. A
     /// hinge keeps its axis `u` perpendicular to two vectors normal to the axis on `b`.
-    Align {
-        /// Unit vector in `a`'s frame.
-        u: Vector3<f64>,
-        /// Unit vector in `b`'s frame (world frame on a world row).
-        v: Vector3<f64>,
-    },
+    Align(Box<AlignAxes>),
+}
+
+/// The two body-frame vectors of a [`RowKind::Align`] row.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct AlignAxes {
+    /// Unit vector in `a`'s frame.
+    pub u: Vector3<f64>,
+    /// Unit vector in `b`'s frame (world frame on a world row).
+    pub v: Vector3<f64>,
 }
 
 /// A joint type of `model.joints`.

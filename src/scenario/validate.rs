@@ -44,7 +44,7 @@ use self::partition::partition;
 pub use self::partition::{DEFAULT_EXTRAPOLATE, DEFAULT_LINES_ABOVE, DEFAULT_TANK};
 use super::file::{
     BodyModelFile, ForceFile, IntegratorFile, MeasurementFile, OutputFile, ScenarioFile,
-    SolverFile, SolverKind, StabilizerFile, StabilizerKind, TorqueFile, DEFAULT_CG_MAX_ITERATIONS,
+    SolverFile, SolverKind, StabilizerFile, StabilizerKind, DEFAULT_CG_MAX_ITERATIONS,
     DEFAULT_CG_TOLERANCE, DEFAULT_MEASUREMENT_PERIOD, DEFAULT_PCG_MAX_ITERATIONS,
     DEFAULT_PCG_REFACTOR_EVERY, DEFAULT_PCG_TOLERANCE, DEFAULT_SMC_EPSILON, DEFAULT_SMC_K,
     DEFAULT_SMC_MU,
@@ -543,18 +543,15 @@ fn loads_needing_rotation(file: &ScenarioFile) -> Option<(String, Vec<f64>)> {
 }
 
 /// One entry of `torques`: the time function of a force, applied as a pure torque.
-fn torque(path: &str, t: &TorqueFile, ids: &Ids) -> Result<ForceSpec> {
-    let as_force = ForceFile {
-        body: t.body,
-        amplitude: t.amplitude,
-        omega: t.omega,
-        phase: t.phase,
-        from: t.from,
-        until: t.until,
-        ramp: t.ramp.clone(),
-        point: None,
-    };
-    let mut spec = force(path, &as_force, ids)?;
+fn torque(path: &str, t: &ForceFile, ids: &Ids) -> Result<ForceSpec> {
+    if t.point.is_some() {
+        return Err(Error::invalid(
+            format!("{path}.point"),
+            "a torque acts about the body's centre and has no point (a force at a point \
+             gives its torque itself)",
+        ));
+    }
+    let mut spec = force(path, t, ids)?;
     spec.applied = LoadAt::Torque;
     Ok(spec)
 }

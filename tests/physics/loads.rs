@@ -114,4 +114,10 @@ fn loads_that_turn_a_body_are_refused_on_point_masses() {
         e.contains("torques[0].amplitude") && e.contains("rigid"),
         "{e}"
     );
+    let e = base(json!({"body_model": "rigid",
+                        "torques": [{"body": 1, "amplitude": [1, 0, 0], "point": [0, 1, 0]}]}));
+    assert!(
+        e.starts_with("torques[0].point: a torque acts about the body's centre"),
+        "{e}"
+    );
 }

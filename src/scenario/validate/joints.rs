@@ -7,7 +7,7 @@ use super::bodies::Ids;
 use super::checks::{magnitude_vector, vec_str};
 use crate::error::{Error, Result};
 use crate::scenario::file::{JointFile, JointTypeFile};
-use crate::scenario::model::{BodySpec, JointType, LinkSpec, RowKind};
+use crate::scenario::model::{AlignAxes, BodySpec, JointType, LinkSpec, RowKind};
 
 /// Most joints a scenario may declare (each adds at most 6 rows to the constraint
 /// system; the links' own limit is the body count's).
@@ -118,9 +118,11 @@ fn joint(
         anchor_b,
         kind,
         world: b.is_none(),
-        joint: Some((j, r)),
+        joint: Some((j as u32, r as u32)),
     };
-    let mut rows: Vec<LinkSpec> = (0..3).map(|k| row(k, RowKind::Offset(k))).collect();
+    let mut rows: Vec<LinkSpec> = (0..3u8)
+        .map(|k| row(usize::from(k), RowKind::Offset(k)))
+        .collect();
     let e = [Vector3::x(), Vector3::y(), Vector3::z()];
     let pairs: Vec<(Vector3<f64>, Vector3<f64>)> = match (kind, axis) {
         (JointType::Hinge, Some(axis)) => {
@@ -135,10 +137,10 @@ fn joint(
     for (k, (u, v)) in pairs.into_iter().enumerate() {
         rows.push(row(
             3 + k,
-            RowKind::Align {
+            RowKind::Align(Box::new(AlignAxes {
                 u: ra.inverse() * u,
                 v: in_b(v),
-            },
+            })),
         ));
     }
     Ok(rows)
