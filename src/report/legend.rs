@@ -31,7 +31,8 @@ pub(crate) enum Swatch {
         marker: bool,
     },
     /// A dashed line of this colour and width [px] (on, off [px]) with a marker of
-    /// `shape` in its middle: a series drawn on top of another it coincides with.
+    /// `shape` in its middle (if the plot draws markers): a series drawn on top of
+    /// another it coincides with.
     Dashed {
         /// Colour of the line.
         colour: RGBColor,
@@ -40,7 +41,7 @@ pub(crate) enum Swatch {
         /// Dash length and gap [px].
         dash: (u32, u32),
         /// The marker in the middle.
-        shape: Shape,
+        shape: Option<Shape>,
     },
     /// A dot of this colour, no line.
     Marker(RGBColor),
@@ -199,7 +200,9 @@ pub(crate) fn draw<DB: DrawingBackend>(
                     dash.1,
                     colour.stroke_width(width),
                 ))?;
-                shape.draw(area, (mid, y), colour)?;
+                if let Some(shape) = shape {
+                    shape.draw(area, (mid, y), colour)?;
+                }
             }
             Swatch::Marker(colour) => area.draw(&Circle::new((mid, y), 4, colour.filled()))?,
             Swatch::Cross => area.draw(&Cross::new((mid, y), 5, BLACK.stroke_width(2)))?,

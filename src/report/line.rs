@@ -432,7 +432,7 @@ fn legend_entries(
                     colour,
                     width: s.width.unwrap_or(2),
                     dash,
-                    shape,
+                    shape: plot.markers.then_some(shape),
                 }
             } else if s.crosses {
                 Swatch::Cross
