@@ -78,6 +78,7 @@ fn bench_sweep(c: &mut Criterion) {
         keep: Default::default(),
         resume: false,
         shard: shard(),
+        sets: Vec::new(),
     };
     let n = points();
     let mut group = c.benchmark_group(GROUP);

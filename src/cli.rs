@@ -11,6 +11,8 @@ use clap::{Parser, Subcommand};
 
 use crate::scenario;
 
+mod size;
+
 use crate::console::say;
 
 macro_rules! say {
@@ -306,6 +308,10 @@ pub enum Command {
     Sweep {
         /// Sweep file (JSON).
         sweep: PathBuf,
+        /// Change a value of the sweep's base scenario (`POINTER=VALUE`, as for `run`);
+        /// repeatable, applied in order before the sweep's own overrides and axes.
+        #[arg(long = "set", value_name = "POINTER=VALUE")]
+        sets: Vec<String>,
         /// Output directory (created if missing).
         #[arg(short, long, value_name = "DIR")]
         out: PathBuf,
@@ -430,16 +436,19 @@ pub struct LimitArgs {
     /// Most integration steps of the run.
     #[arg(long, value_name = "N", default_value_t = crate::run::budget::DEFAULT_MAX_STEPS)]
     max_steps: u64,
-    /// Most bytes trace.csv may take (estimated before the run).
-    #[arg(long, value_name = "BYTES", default_value_t = crate::run::budget::DEFAULT_MAX_OUTPUT_BYTES)]
+    /// Most bytes trace.csv may take (estimated before the run); a size as for
+    /// --max-memory.
+    #[arg(long, value_name = "SIZE", value_parser = size::parse_bytes,
+          default_value_t = crate::run::budget::DEFAULT_MAX_OUTPUT_BYTES)]
     max_output: u64,
     /// Most checkpoints the run may write.
     #[arg(long, value_name = "N", default_value_t = crate::run::budget::DEFAULT_MAX_CHECKPOINTS)]
     max_checkpoints: u64,
-    /// Most bytes of memory the run may need (estimated before the run) [default: the
-    /// smallest of 16000000000, the address-space limit (ulimit -v) and the cgroup's
-    /// memory limit].
-    #[arg(long, value_name = "BYTES")]
+    /// Most memory the run may need (estimated before the run): bytes, or a number with
+    /// K, M, G, T (powers of 1024, also written KiB … TiB) or KB, MB, GB, TB (powers of
+    /// 1000), e.g. 16G, 512M, 1.5GiB [default: the smallest of 16GB, the address-space
+    /// limit (ulimit -v) and the cgroup's memory limit].
+    #[arg(long, value_name = "SIZE", value_parser = size::parse_bytes)]
     max_memory: Option<u64>,
 }
 
@@ -593,13 +602,14 @@ pub fn execute(command: Command) -> crate::Result<()> {
             limits,
         } => {
             if is_sweep(&scenario) {
-                if !sets.is_empty() || json.is_some() {
+                if json.is_some() {
                     return Err(crate::Error::invalid(
-                        "--set/--json",
-                        "apply to scenario files, not to a sweep file",
+                        "--json",
+                        "writes a scenario's plan; a sweep file has one per point \
+                         (`dsmcosim sweep` writes each point's scenario.json)",
                     ));
                 }
-                let c = crate::sweep::check(&scenario)?;
+                let c = crate::sweep::check_with(&scenario, &sets)?;
                 for w in &c.warnings {
                     eprintln!("warning: {w}");
                 }
@@ -791,6 +801,7 @@ pub fn execute(command: Command) -> crate::Result<()> {
         }
         Command::Sweep {
             sweep,
+            sets,
             out,
             resume,
             shard,
@@ -805,6 +816,7 @@ pub fn execute(command: Command) -> crate::Result<()> {
                 keep,
                 resume,
                 shard,
+                sets,
             };
             let r = crate::sweep::run(&sweep, &out, &options)?;
             say!(

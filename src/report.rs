@@ -80,6 +80,14 @@ const PALETTE: [RGBColor; 12] = [
     RGBColor(0x39, 0x3b, 0x79),
 ];
 
+/// Palette colour `i` (cycling) as `[r, g, b]`, mixed with white by `white` (0 the
+/// colour itself, 1 white): for a series set back behind a highlighted one.
+pub(crate) fn palette(i: usize, white: f64) -> [u8; 3] {
+    let c = PALETTE[i % PALETTE.len()];
+    let mix = |v: u8| (f64::from(v) + (255.0 - f64::from(v)) * white.clamp(0.0, 1.0)).round() as u8;
+    [mix(c.0), mix(c.1), mix(c.2)]
+}
+
 /// Colour of grid lines.
 const GRID: RGBColor = RGBColor(0xdd, 0xdd, 0xdd);
 
@@ -117,6 +125,79 @@ pub(crate) mod tests_support {
                 ))
             })
             .collect()
+    }
+
+    /// The approximate box `(x0, y0, x1, y1)` [px] of every non-empty `<text>`, with
+    /// its text: from the anchor (`x`, `y`), `text-anchor`, the `dy` plotters writes
+    /// for a top (`0.76em`), centred (`0.5ex`) or bottom (`-0.5ex`) anchor, the
+    /// `font-size` (a glyph 0.56 em wide on average, as DejaVu Sans draws lower-case
+    /// text and digits; 0.9 em tall, ascender to descender) and a `rotate(90|270, …)`.
+    pub(crate) fn text_boxes(svg: &str) -> Vec<(String, (f64, f64, f64, f64))> {
+        let attr = |tag: &str, name: &str| -> Option<String> {
+            let at = tag.find(&format!(" {name}=\""))? + name.len() + 3;
+            let len = tag[at..].find('"')?;
+            Some(tag[at..at + len].to_string())
+        };
+        let num = |tag: &str, name: &str| attr(tag, name).and_then(|v| v.parse::<f64>().ok());
+        svg.split("<text")
+            .skip(1)
+            .filter_map(|rest| {
+                let end = rest.find('>')?;
+                let tag = &rest[..end];
+                let body = rest[end + 1..rest.find("</text>")?].trim();
+                let body = body
+                    .replace("&lt;", "<")
+                    .replace("&gt;", ">")
+                    .replace("&amp;", "&")
+                    .replace("&quot;", "\"");
+                if body.is_empty() {
+                    return None;
+                }
+                let (x, y, fs) = (num(tag, "x")?, num(tag, "y")?, num(tag, "font-size")?);
+                let w = 0.56 * fs * body.chars().count() as f64;
+                let h = 0.9 * fs;
+                // Offsets of the unrotated box from the anchor.
+                let (dx0, dx1) = match attr(tag, "text-anchor").as_deref() {
+                    Some("middle") => (-w / 2.0, w / 2.0),
+                    Some("end") => (-w, 0.0),
+                    _ => (0.0, w),
+                };
+                let (dy0, dy1) = match attr(tag, "dy").as_deref() {
+                    Some("0.76em") => (0.0, h),
+                    Some("-0.5ex") => (-h, 0.0),
+                    _ => (-h / 2.0, h / 2.0),
+                };
+                let angle = attr(tag, "transform")
+                    .and_then(|t| {
+                        t.strip_prefix("rotate(")?
+                            .split(',')
+                            .next()?
+                            .trim()
+                            .parse::<f64>()
+                            .ok()
+                    })
+                    .unwrap_or(0.0);
+                let b = match angle as i32 {
+                    // (dx, dy) turns into (dy, -dx).
+                    270 => (x + dy0, y - dx1, x + dy1, y - dx0),
+                    // (dx, dy) turns into (-dy, dx).
+                    90 => (x - dy1, y + dx0, x - dy0, y + dx1),
+                    _ => (x + dx0, y + dy0, x + dx1, y + dy1),
+                };
+                Some((body, b))
+            })
+            .collect()
+    }
+
+    /// Panics naming the first two texts of `svg` whose [`text_boxes`] intersect.
+    pub(crate) fn assert_no_text_overlaps(svg: &str) {
+        let boxes = text_boxes(svg);
+        for (i, (a, ra)) in boxes.iter().enumerate() {
+            for (b, rb) in &boxes[i + 1..] {
+                let hit = ra.0 < rb.2 && rb.0 < ra.2 && ra.1 < rb.3 && rb.1 < ra.3;
+                assert!(!hit, "text {a:?} at {ra:?} overlaps {b:?} at {rb:?}");
+            }
+        }
     }
 
     /// `(x, y, text)` of every `<text>` element (plotters writes the text on its own

@@ -690,10 +690,15 @@ mod tests {
             .unwrap_or(0)
     }
 
-    /// Link names `L<k>` among the texts of `svg`, with their x.
+    /// Link names `L<k>` among the texts of `svg`, with their x (a legend row of a line
+    /// drawn dashed on another reads `L2 (dashed, lies on L1)`).
     fn link_names(svg: &str) -> Vec<(i32, String)> {
         texts(svg)
             .into_iter()
+            .map(|t| match t.2.split_once(" (dashed, lies on ") {
+                Some((name, _)) => (t.0, t.1, name.to_string()),
+                None => t,
+            })
             .filter(|t| t.2.len() > 1 && t.2.starts_with('L'))
             .filter(|t| t.2[1..].chars().all(|c| c.is_ascii_digit()))
             .map(|t| (t.0, t.2))

@@ -77,7 +77,7 @@ pub mod table;
 
 use std::path::Path;
 
-pub use exec::{check, run, Checked, Keep, Options, Report, Shard};
+pub use exec::{check, check_with, run, Checked, Keep, Options, Report, Shard};
 pub use merge::{merge, MergeReport};
 pub use points::{derive_seed, splitmix64};
 

@@ -83,6 +83,9 @@ pub struct Batch {
     pub tolerance: Tolerance,
     /// One per scenario, in argument order.
     pub outcomes: Vec<Outcome>,
+    /// Wall-clock seconds of the whole check, from reading the first scenario to the
+    /// last outcome [s]: less than the outcomes' sum when they ran in parallel.
+    pub elapsed_seconds: f64,
 }
 
 /// Exit codes in order of precedence (see the module docs).
@@ -118,8 +121,15 @@ impl Batch {
             .unwrap_or(0)
     }
 
-    /// Total wall-clock seconds of the scenarios' checks (summed, not elapsed) [s].
+    /// Wall-clock seconds the check took, as a CI job's clock sees it [s]; at least the
+    /// longest scenario's and, with scenarios in parallel, less than their sum.
     pub fn wall_seconds(&self) -> f64 {
+        self.elapsed_seconds
+    }
+
+    /// The scenarios' own wall seconds summed (CPU-ish work; more than
+    /// [`Batch::wall_seconds`] when they ran in parallel) [s].
+    pub fn summed_seconds(&self) -> f64 {
         self.outcomes.iter().map(|o| o.wall_seconds).sum()
     }
 
@@ -222,6 +232,7 @@ fn stored_dir(against: &Path, name: &str, file: &Path) -> PathBuf {
 /// only for a bad `--tolerance` (before anything runs); everything about one scenario
 /// is in its [`Outcome`].
 pub fn run(scenarios: &[PathBuf], options: &Options) -> Result<Batch> {
+    let started = Instant::now();
     let tolerance = parse_tolerance(options.tolerance)?;
     let against = &options.against;
     let layout = if scenarios.len() == 1 && against.join("summary.json").exists() {
@@ -331,6 +342,7 @@ pub fn run(scenarios: &[PathBuf], options: &Options) -> Result<Batch> {
         against: against.clone(),
         tolerance,
         outcomes,
+        elapsed_seconds: started.elapsed().as_secs_f64(),
     })
 }
 
@@ -401,6 +413,7 @@ mod tests {
             against: "r".into(),
             tolerance: Tolerance::Exact,
             outcomes: results.into_iter().map(|(r, f)| outcome(r, f)).collect(),
+            elapsed_seconds: 0.0,
         };
         let bad = || Error::invalid("name", "must not be empty");
         let mismatch = || Err(Error::Mismatch("x".into()));

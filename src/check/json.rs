@@ -4,7 +4,9 @@
 //! { "tool": "dsmcosim", "version": "0.1.0",
 //!   "against": "results/", "layout": "by_name" | "single", "tolerance": null | X,
 //!   "exit_code": 4,
-//!   "totals": { "scenarios", "match", "mismatch", "missing", "error", "wall_seconds" },
+//!   "totals": { "scenarios", "match", "mismatch", "missing", "error",
+//!               "wall_seconds",                // the check's own, start to end
+//!               "summed_seconds" },            // the scenarios' times added up
 //!   "scenarios": [ {                       // in argument order
 //!     "name", "scenario" (file), "stored" (dir), "new" (dir or null),
 //!     "status": "match" | "mismatch" | "missing" | "error",
@@ -54,6 +56,7 @@ pub fn value(batch: &Batch) -> Value {
             "missing": t.missing,
             "error": t.errors,
             "wall_seconds": batch.wall_seconds(),
+            "summed_seconds": batch.summed_seconds(),
         },
         "scenarios": batch.outcomes.iter().map(outcome).collect::<Vec<_>>(),
     })

@@ -3,7 +3,10 @@
 //!
 //! One `<testsuite name="dsmcosim.check">` inside `<testsuites>`, one `<testcase>` per
 //! scenario in argument order: `classname="dsmcosim.check"`, `name` the scenario name,
-//! `file` the scenario file, `time` the wall seconds of its rerun and comparison. A
+//! `file` the scenario file, `time` the wall seconds of its rerun and comparison. The
+//! suite's `time` (and `testsuites`') is the wall time of the whole check, start to
+//! end: scenarios rerun in parallel, so it is less than the testcases' times added up
+//! (at least the longest of them), as a CI job's clock sees it. A
 //! mismatch has a `<failure type="mismatch">` whose `message` is the first differing
 //! record (file, time, column, stored and new values) and whose text is the full
 //! explanation; a missing stored run or another error has an `<error type="missing">`
@@ -112,6 +115,40 @@ pub fn escape(text: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::check::batch::{Layout, Outcome};
+
+    #[test]
+    fn the_suite_time_is_the_checks_wall_time_not_the_sum() {
+        // Two scenarios that ran side by side for 3 s and 2 s in a check of 3.25 s.
+        let case = |name: &str, t: f64| Outcome {
+            name: name.into(),
+            scenario: format!("{name}.json").into(),
+            stored: format!("r/{name}").into(),
+            new: None,
+            wall_seconds: t,
+            result: Err(crate::Error::invalid("name", "x")),
+            stored_failed: false,
+        };
+        let batch = Batch {
+            layout: Layout::ByName,
+            against: "r".into(),
+            tolerance: Tolerance::Exact,
+            outcomes: vec![case("a", 3.0), case("b", 2.0)],
+            elapsed_seconds: 3.25,
+        };
+        let x = render(&batch);
+        assert!(x.contains("<testsuites name=\"dsmcosim check\" tests=\"2\" failures=\"0\" errors=\"2\" time=\"3.250\">"), "{x}");
+        assert!(x.contains("skipped=\"0\" time=\"3.250\">"), "{x}");
+        assert!(
+            x.contains("name=\"a\" file=\"a.json\" time=\"3.000\""),
+            "{x}"
+        );
+        assert!(
+            x.contains("name=\"b\" file=\"b.json\" time=\"2.000\""),
+            "{x}"
+        );
+        assert!(!x.contains("5.000"), "{x}");
+    }
 
     #[test]
     fn escapes_markup_whitespace_and_forbidden_characters() {

@@ -6,6 +6,7 @@ use std::io;
 use std::path::Path;
 
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::axis::Axis;
 use super::legend::{self, Entry, Swatch};
@@ -223,11 +224,38 @@ fn render(map: &Heatmap, target: &Path) -> Result<String> {
         None => widest(&y_axis),
     };
     let y_area = (y_width + 40).clamp(60, 200);
+    // Category names along x that do not fit their cells side by side are drawn turned
+    // a quarter, reading upwards, under their cells (cut with `…` past MAX_TURNED px).
+    let x_names = map.categories[0].map(|names| {
+        let plot_width = SIZE.0.saturating_sub(panel_width(map) + 32 + y_area);
+        let cell = plot_width / names.len().max(1) as u32;
+        let widest = names
+            .iter()
+            .map(|n| text_width(n, TICK_PX))
+            .max()
+            .unwrap_or(0);
+        let turned = widest + 8 > cell;
+        let shown: Vec<String> = if turned {
+            names.iter().map(|n| cut(n, MAX_TURNED)).collect()
+        } else {
+            names.to_vec()
+        };
+        (shown, turned)
+    });
+    let x_area = match &x_names {
+        Some((shown, true)) => {
+            let longest = shown
+                .iter()
+                .map(|n| text_width(n, TICK_PX))
+                .max()
+                .unwrap_or(0);
+            longest + 45
+        }
+        _ => 55,
+    };
     let v_area = (widest(&v_axis) + 40).clamp(60, BAR_PANEL - 30);
     let class_legend = map.classes.map(|c| class_entries(map, c));
-    let panel = class_legend
-        .as_deref()
-        .map_or(BAR_PANEL, |e| legend::panel_width(e).max(BAR_PANEL));
+    let panel = panel_width(map);
 
     let mut svg = String::new();
     {
@@ -238,10 +266,11 @@ fn render(map: &Heatmap, target: &Path) -> Result<String> {
 
         let mut chart = ChartBuilder::on(&main)
             .margin(16)
-            .x_label_area_size(55)
+            .x_label_area_size(x_area)
             .y_label_area_size(y_area)
             .build_cartesian_2d(x_axis, y_axis)
             .map_err(&err)?;
+        let turned = matches!(x_names, Some((_, true)));
         // A categorical axis names its cells at their (integer) centres.
         let category = |names: Option<&[String]>, v: f64, axis: &Axis| match names {
             None => axis.label(v),
@@ -255,7 +284,13 @@ fn render(map: &Heatmap, target: &Path) -> Result<String> {
             }
         };
         let (xa, ya) = (x_axis, y_axis);
-        let x_format = |v: &f64| category(map.categories[0], *v, &xa);
+        let x_format = |v: &f64| {
+            if turned {
+                String::new()
+            } else {
+                category(map.categories[0], *v, &xa)
+            }
+        };
         let y_format = |v: &f64| category(map.categories[1], *v, &ya);
         chart
             .configure_mesh()
@@ -292,6 +327,18 @@ fn render(map: &Heatmap, target: &Path) -> Result<String> {
             })
         });
         chart.draw_series(cells).map_err(&err)?;
+        if let Some((names, true)) = &x_names {
+            let style = TextStyle::from((FONT, TICK_PX).into_font())
+                .color(&BLACK)
+                .transform(FontTransform::Rotate270)
+                .pos(Pos::new(HPos::Right, VPos::Center));
+            let bottom = chart.plotting_area().get_pixel_range().1.end;
+            for (i, name) in names.iter().enumerate() {
+                let (px, _) = chart.backend_coord(&(i as f64, y_axis.lo()));
+                root.draw(&Text::new(name.clone(), (px, bottom + 8), style.clone()))
+                    .map_err(&err)?;
+            }
+        }
         let line = finite_points(map.line_overlay);
         if !line.is_empty() {
             chart
@@ -331,11 +378,34 @@ fn render(map: &Heatmap, target: &Path) -> Result<String> {
                 )
                 .map_err(&err)?;
             }
-            None => colour_bar(&bar, map.value_label, v_axis, v_area).map_err(&err)?,
+            None => colour_bar(&bar, map.value_label, v_axis, v_area, x_area).map_err(&err)?,
         }
         root.present().map_err(&err)?;
     }
     Ok(svg)
+}
+
+/// Longest turned category name along x [px]; longer ones are cut with `…`.
+const MAX_TURNED: u32 = 200;
+
+/// Width [px] of the panel right of the cells: the colour bar's, or the class legend's.
+fn panel_width(map: &Heatmap) -> u32 {
+    map.classes
+        .map(|c| class_entries(map, c))
+        .as_deref()
+        .map_or(BAR_PANEL, |e| legend::panel_width(e).max(BAR_PANEL))
+}
+
+/// `name`, cut to at most `px` wide at `TICK_PX` with a trailing `…`.
+fn cut(name: &str, px: u32) -> String {
+    if text_width(name, TICK_PX) <= px {
+        return name.to_string();
+    }
+    let mut out: String = name.to_string();
+    while !out.is_empty() && text_width(&format!("{out}…"), TICK_PX) > px {
+        out.pop();
+    }
+    format!("{out}…")
 }
 
 /// Draws the colour bar into `area`: the value axis on the right of a strip of the
@@ -345,10 +415,12 @@ fn colour_bar<DB: DrawingBackend>(
     value_label: &str,
     v_axis: Axis,
     v_area: u32,
+    x_area: u32,
 ) -> std::result::Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    // As tall as the cells beside it.
     let mut bar_chart = ChartBuilder::on(area)
         .margin_top(16)
-        .margin_bottom(16 + 55)
+        .margin_bottom(16 + x_area)
         .margin_left(10)
         .margin_right(10)
         .right_y_label_area_size(v_area)
@@ -442,6 +514,54 @@ mod tests {
             "missing cells"
         );
         assert_eq!(svg, heatmap_svg(&map).unwrap());
+        crate::report::tests_support::assert_no_text_overlaps(&svg);
+    }
+
+    #[test]
+    fn long_category_names_along_x_are_turned_and_do_not_overlap() {
+        // The slot-layout sweep's picture: ten long names under ten cells.
+        let names: Vec<String> = (0..10)
+            .map(|i| format!("{i} blocked_5ms_off_step_{}", "x".repeat(i)))
+            .collect();
+        let drift: Vec<String> = ["0", "300", "1000"].map(String::from).to_vec();
+        let x: Vec<f64> = (0..10).map(f64::from).collect();
+        let y = [0.0, 1.0, 2.0];
+        let values: Vec<Vec<f64>> = (0..3)
+            .map(|r| (0..10).map(|c| (r * c) as f64).collect())
+            .collect();
+        let map = Heatmap {
+            title: "layouts",
+            x_label: "layout",
+            y_label: "drift [ppm]",
+            value_label: "mean cost C [m]",
+            x: &x,
+            y: &y,
+            values: &values,
+            path_overlay: &[],
+            line_overlay: &[],
+            categories: [Some(&names), Some(&drift)],
+            classes: None,
+        };
+        let svg = heatmap_svg(&map).unwrap();
+        let turned = svg.matches("transform=\"rotate(270").count();
+        // Ten names and the y axis label (and the colour bar's).
+        assert!(turned >= 11, "{turned} turned texts");
+        assert!(
+            svg.contains("0 blocked_5ms_off_step_\n"),
+            "a short name whole"
+        );
+        assert!(svg.contains("…"), "the longest names cut");
+        crate::report::tests_support::assert_no_text_overlaps(&svg);
+        // Short names stay level.
+        let short: Vec<String> = (0..10).map(|i| format!("L{i}")).collect();
+        let svg = heatmap_svg(&Heatmap {
+            categories: [Some(&short), Some(&drift)],
+            ..map
+        })
+        .unwrap();
+        assert!(!svg.contains(">\nL3\n</text>") || !svg.contains("rotate(270, 3"));
+        assert_eq!(svg.matches("transform=\"rotate(270").count(), turned - 10);
+        crate::report::tests_support::assert_no_text_overlaps(&svg);
     }
 
     #[test]

@@ -1,10 +1,15 @@
-//! Text labels next to plotted points, placed so that they overlap each other, the
-//! markers and the plot's edges as little as a greedy search can manage.
+//! Text labels next to plotted points, placed so that they never overlap each other
+//! and overlap the markers and the plot's edges as little as a greedy search can
+//! manage.
 //!
 //! Each label tries, in order, right of its point, left, above, below and the four
-//! diagonals, first close and then farther out, and takes the first place that
-//! touches nothing already placed; failing that the place with the fewest collisions.
-//! Labels are placed in input order, so the same input gives the same picture.
+//! diagonals, first close and then farther out, and then rows stacked above and below
+//! its point, and takes the first place that touches nothing already placed; failing
+//! that the place with the fewest collisions, another label counting more than
+//! anything else. A label set farther than [`LEADER_FROM`] from its point gets a thin
+//! leader line back to it. Labels are placed in input order, so the same input gives the
+//! same picture. The boxes the search keeps apart are the estimated text extents plus
+//! [`PAD`] on every side, wider than the text a viewer draws in a common sans-serif.
 
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
@@ -15,6 +20,12 @@ use super::text_width;
 const OFFSET: i32 = 7;
 /// Radius [px] around a marker that a label should keep free.
 const MARKER_R: i32 = 4;
+/// Free space [px] kept around each label's estimated text box.
+const PAD: i32 = 2;
+/// A label whose near edge is farther than this from its point [px] gets a leader line.
+const LEADER_FROM: i32 = 3 * OFFSET;
+/// Rows tried above and below a point once the ring of places around it is full.
+const STACK_ROWS: i32 = 24;
 
 /// A pixel rectangle `(x0, y0, x1, y1)`, `x0 <= x1`, `y0 <= y1`.
 type Rect = (i32, i32, i32, i32);
@@ -28,15 +39,28 @@ pub(crate) struct Placed {
     pub at: (i32, i32),
     /// How the text sits relative to `at`.
     pub pos: Pos,
+    /// The labelled point [px], when the label sits far from it and a leader line
+    /// should join them.
+    pub leader: Option<(i32, i32)>,
+}
+
+impl Placed {
+    /// The point on the label's box nearest to `p` (where a leader line ends).
+    pub fn nearest_edge(&self, p: (i32, i32), size: f64) -> (i32, i32) {
+        let r = bounds(&self.text, size, self.at, self.pos);
+        (p.0.clamp(r.0, r.2), p.1.clamp(r.1, r.3))
+    }
 }
 
 fn overlaps(a: Rect, b: Rect) -> bool {
     a.0 < b.2 && b.0 < a.2 && a.1 < b.3 && b.1 < a.3
 }
 
-/// The box of `text` at `size` anchored at `at` with `pos`.
+/// The box of `text` at `size` anchored at `at` with `pos`, with [`PAD`] around the
+/// estimated text (a tenth wider than [`text_width`], which is tuned for layout, so
+/// that digit-heavy labels drawn a little wide still fit).
 fn bounds(text: &str, size: f64, at: (i32, i32), pos: Pos) -> Rect {
-    let w = text_width(text, size) as i32;
+    let w = (text_width(text, size) * 11 / 10) as i32;
     let h = (size / 1.24).round() as i32;
     let x0 = match pos.h_pos {
         HPos::Left => at.0,
@@ -48,11 +72,11 @@ fn bounds(text: &str, size: f64, at: (i32, i32), pos: Pos) -> Rect {
         VPos::Bottom => at.1 - h,
         VPos::Center => at.1 - h / 2,
     };
-    (x0, y0, x0 + w, y0 + h)
+    (x0 - PAD, y0 - PAD, x0 + w + PAD, y0 + h + PAD)
 }
 
 /// Places `labels` (text, point [px]) inside `area`, avoiding (in this order of
-/// weight) the area's edges, each other, the `markers` and the points along drawn
+/// weight) each other, the area's edges, the `markers` and the points along drawn
 /// lines `line_points` [px]. Empty texts are skipped.
 pub(crate) fn place(
     labels: &[(String, (i32, i32))],
@@ -71,41 +95,50 @@ pub(crate) fn place(
             continue;
         }
         let mut best: Option<(usize, Placed, Rect)> = None;
-        for d in [OFFSET, 2 * OFFSET, 3 * OFFSET, 5 * OFFSET] {
+        let h = (size / 1.24).round() as i32 + 2 * PAD;
+        let mut candidates = Vec::new();
+        for d in [OFFSET, 2 * OFFSET, 3 * OFFSET, 5 * OFFSET, 8 * OFFSET] {
             let e = d * 7 / 10;
-            let candidates = [
-                ((x + d, *y), HPos::Left, VPos::Center),
-                ((x - d, *y), HPos::Right, VPos::Center),
-                ((*x, y - d), HPos::Center, VPos::Bottom),
-                ((*x, y + d), HPos::Center, VPos::Top),
-                ((x + e, y - e), HPos::Left, VPos::Bottom),
-                ((x + e, y + e), HPos::Left, VPos::Top),
-                ((x - e, y - e), HPos::Right, VPos::Bottom),
-                ((x - e, y + e), HPos::Right, VPos::Top),
-            ];
-            for (at, h, v) in candidates {
-                let pos = Pos::new(h, v);
-                let r = bounds(text, size, at, pos);
-                let outside = r.0 < area.0 || r.1 < area.1 || r.2 > area.2 || r.3 > area.3;
-                // Crossing a line costs the same however long the crossing.
-                let cost = 1000 * usize::from(outside)
-                    + 100 * taken.iter().filter(|t| overlaps(**t, r)).count()
-                    + 20 * marker_boxes.iter().filter(|m| overlaps(**m, r)).count()
-                    + 15 * usize::from(line_boxes.iter().any(|m| overlaps(*m, r)))
-                    + usize::from(d > OFFSET);
-                if best.as_ref().is_none_or(|b| cost < b.0) {
-                    let placed = Placed {
-                        text: text.clone(),
-                        at,
-                        pos,
-                    };
-                    best = Some((cost, placed, r));
-                }
-                if cost == 0 {
-                    break;
-                }
+            candidates.extend([
+                ((x + d, *y), HPos::Left, VPos::Center, d),
+                ((x - d, *y), HPos::Right, VPos::Center, d),
+                ((*x, y - d), HPos::Center, VPos::Bottom, d),
+                ((*x, y + d), HPos::Center, VPos::Top, d),
+                ((x + e, y - e), HPos::Left, VPos::Bottom, d),
+                ((x + e, y + e), HPos::Left, VPos::Top, d),
+                ((x - e, y - e), HPos::Right, VPos::Bottom, d),
+                ((x - e, y + e), HPos::Right, VPos::Top, d),
+            ]);
+        }
+        // Then rows stacked above and below the point, right and left of it.
+        for k in 1..=STACK_ROWS {
+            for dy in [-k * h, k * h] {
+                candidates.push(((x + OFFSET, y + dy), HPos::Left, VPos::Center, dy.abs()));
+                candidates.push(((x - OFFSET, y + dy), HPos::Right, VPos::Center, dy.abs()));
             }
-            if best.as_ref().is_some_and(|b| b.0 == 0) {
+        }
+        for (at, hpos, vpos, d) in candidates {
+            let pos = Pos::new(hpos, vpos);
+            let r = bounds(text, size, at, pos);
+            let outside = r.0 < area.0 || r.1 < area.1 || r.2 > area.2 || r.3 > area.3;
+            // Another label costs most, then leaving the area; crossing a line costs
+            // the same however long the crossing; each further OFFSET from the point
+            // costs 1, so a label goes far (with a leader) only to avoid a collision.
+            let cost = 100_000 * taken.iter().filter(|t| overlaps(**t, r)).count()
+                + 10_000 * usize::from(outside)
+                + 20 * marker_boxes.iter().filter(|m| overlaps(**m, r)).count()
+                + 15 * usize::from(line_boxes.iter().any(|m| overlaps(*m, r)))
+                + (d / OFFSET - 1).max(0) as usize;
+            if best.as_ref().is_none_or(|b| cost < b.0) {
+                let placed = Placed {
+                    text: text.clone(),
+                    at,
+                    pos,
+                    leader: (d > LEADER_FROM).then_some((*x, *y)),
+                };
+                best = Some((cost, placed, r));
+            }
+            if cost == 0 {
                 break;
             }
         }

@@ -30,6 +30,19 @@ pub(crate) enum Swatch {
         /// A dot in the middle.
         marker: bool,
     },
+    /// A dashed line of this colour and width [px] (on, off [px]) with a marker of
+    /// `shape` in its middle (if the plot draws markers): a series drawn on top of
+    /// another it coincides with.
+    Dashed {
+        /// Colour of the line.
+        colour: RGBColor,
+        /// Stroke width [px].
+        width: u32,
+        /// Dash length and gap [px].
+        dash: (u32, u32),
+        /// The marker in the middle.
+        shape: Option<Shape>,
+    },
     /// A dot of this colour, no line.
     Marker(RGBColor),
     /// A black cross.
@@ -47,6 +60,37 @@ pub(crate) enum Swatch {
     Text,
     /// Nothing, text indented as after a swatch: the next line of a wrapped entry.
     Continued,
+}
+
+/// The marker drawn at the points of a series that lies on another (the others get
+/// filled dots).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Shape {
+    /// A filled triangle, point up.
+    Triangle,
+    /// An open square.
+    Square,
+    /// A diagonal cross.
+    Cross,
+}
+
+impl Shape {
+    /// Draws the marker of this shape centred on `at` [px] (3 px to its edge).
+    pub(crate) fn draw<DB: DrawingBackend>(
+        self,
+        area: &DrawingArea<DB, Shift>,
+        at: (i32, i32),
+        colour: RGBColor,
+    ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+        match self {
+            Shape::Triangle => area.draw(&TriangleMarker::new(at, 5, colour.filled())),
+            Shape::Square => area.draw(&Rectangle::new(
+                [(at.0 - 4, at.1 - 4), (at.0 + 4, at.1 + 4)],
+                colour.stroke_width(2),
+            )),
+            Shape::Cross => area.draw(&Cross::new(at, 4, colour.stroke_width(2))),
+        }
+    }
 }
 
 /// One legend row.
@@ -142,6 +186,22 @@ pub(crate) fn draw<DB: DrawingBackend>(
                 area.draw(&PathElement::new(vec![(x0, y), (x1, y)], style))?;
                 if marker {
                     area.draw(&Circle::new((mid, y), 3, colour.filled()))?;
+                }
+            }
+            Swatch::Dashed {
+                colour,
+                width,
+                dash,
+                shape,
+            } => {
+                area.draw(&plotters::element::DashedPathElement::new(
+                    vec![(x0, y), (x1, y)],
+                    dash.0,
+                    dash.1,
+                    colour.stroke_width(width),
+                ))?;
+                if let Some(shape) = shape {
+                    shape.draw(area, (mid, y), colour)?;
                 }
             }
             Swatch::Marker(colour) => area.draw(&Circle::new((mid, y), 4, colour.filled()))?,

@@ -8,7 +8,7 @@ use std::path::Path;
 use plotters::prelude::*;
 
 use super::axis::{plottable, Axis};
-use super::legend::{self, Entry, Swatch};
+use super::legend::{self, Entry, Shape, Swatch};
 use super::{
     labels, plot_error, text_width, Scale, DESC_PX, FONT, GRID, PALETTE, SIZE, TICK_PX, TITLE_PX,
 };
@@ -24,6 +24,8 @@ const DECIMATE_ABOVE: usize = 4000;
 const COLUMNS: usize = 1000;
 /// Columns for decimating markers: one marker per 4 px at most keeps files small.
 const MARKER_COLUMNS: usize = 250;
+/// Colour of the thin line from a point to its label when the label sits apart.
+const LEADER: RGBColor = RGBColor(0x80, 0x80, 0x80);
 /// Tick labels requested along x and y.
 const X_TICKS: usize = 10;
 /// See [`X_TICKS`].
@@ -334,14 +336,105 @@ fn band_runs(band: &[(f64, f64, f64)], plot: &LinePlot, x_axis: &Axis) -> Vec<Ve
         .collect()
 }
 
+/// Dash patterns (on, off [px]) and markers of series that lie on an earlier one, in
+/// turn: the first such series is dashed 9/5 with triangles, the next 3/4 with squares,
+/// the next 14/4 with crosses, then again.
+const COINCIDING: [((u32, u32), Shape); 3] = [
+    ((9, 5), Shape::Triangle),
+    ((3, 4), Shape::Square),
+    ((14, 4), Shape::Cross),
+];
+
+/// For each series, the earlier series it lies on, if any: at least half of its drawn
+/// segments coincide with segments of that one (ends equal to 1/500 of each axis), so
+/// that drawn solid it would hide it or be hidden. Such a series is drawn dashed with
+/// other markers ([`COINCIDING`]) and its legend row says which line it lies on.
+fn lies_on(
+    plot: &LinePlot,
+    prepared: &[Prepared],
+    x_axis: &Axis,
+    y_axis: &Axis,
+) -> Vec<Option<usize>> {
+    type Key = ((i64, i64), (i64, i64));
+    let q = |p: &(f64, f64)| {
+        (
+            (x_axis.fraction(p.0) * 500.0).round() as i64,
+            (y_axis.fraction(p.1) * 500.0).round() as i64,
+        )
+    };
+    let mut seen: std::collections::HashMap<Key, usize> = std::collections::HashMap::new();
+    let mut out = Vec::with_capacity(prepared.len());
+    for (i, (series, drawn)) in plot.series.iter().zip(prepared).enumerate() {
+        let segments: Vec<Key> = drawn
+            .lines
+            .iter()
+            .flat_map(|l| l.windows(2))
+            .map(|w| {
+                let (a, b) = (q(&w[0]), q(&w[1]));
+                if a <= b {
+                    (a, b)
+                } else {
+                    (b, a)
+                }
+            })
+            .filter(|(a, b)| a != b)
+            .collect();
+        let mut shared: std::collections::BTreeMap<usize, usize> = Default::default();
+        for seg in &segments {
+            if let Some(&j) = seen.get(seg) {
+                *shared.entry(j).or_default() += 1;
+            }
+        }
+        let on = shared
+            .iter()
+            .find(|(_, &n)| 2 * n >= segments.len())
+            .map(|(&j, _)| j);
+        let drawn_as_line = !series.crosses && !series.points_only && !segments.is_empty();
+        out.push(on.filter(|_| drawn_as_line));
+        for seg in segments {
+            seen.entry(seg).or_insert(i);
+        }
+    }
+    out
+}
+
+/// The dash and marker of each series: `None` for a plain line with dots.
+fn dashes(on: &[Option<usize>]) -> Vec<Option<((u32, u32), Shape)>> {
+    let mut k = 0;
+    on.iter()
+        .map(|o| {
+            o.map(|_| {
+                k += 1;
+                COINCIDING[(k - 1) % COINCIDING.len()]
+            })
+        })
+        .collect()
+}
+
 /// One legend row per series, in order.
-fn legend_entries(plot: &LinePlot, colours: &[RGBColor]) -> Vec<Entry> {
+fn legend_entries(
+    plot: &LinePlot,
+    colours: &[RGBColor],
+    on: &[Option<usize>],
+    dashes: &[Option<((u32, u32), Shape)>],
+) -> Vec<Entry> {
     plot.series
         .iter()
         .zip(colours)
-        .map(|(s, &colour)| Entry {
-            text: s.label.clone(),
-            swatch: if s.crosses {
+        .enumerate()
+        .map(|(i, (s, &colour))| Entry {
+            text: match on[i] {
+                Some(j) => format!("{} (dashed, lies on {})", s.label, plot.series[j].label),
+                None => s.label.clone(),
+            },
+            swatch: if let Some((dash, shape)) = dashes[i] {
+                Swatch::Dashed {
+                    colour,
+                    width: s.width.unwrap_or(2),
+                    dash,
+                    shape: plot.markers.then_some(shape),
+                }
+            } else if s.crosses {
                 Swatch::Cross
             } else if !s.band.is_empty() {
                 Swatch::Band {
@@ -385,7 +478,9 @@ fn render(plot: &LinePlot, target: &Path) -> Result<String> {
         .map(|s| prepare(s, plot, &x_axis))
         .collect();
     let colours = colours(plot.series);
-    let entries = legend_entries(plot, &colours);
+    let on = lies_on(plot, &prepared, &x_axis, &y_axis);
+    let dashes = dashes(&on);
+    let entries = legend_entries(plot, &colours, &on, &dashes);
     // The legend panel at the right, outside the plot area.
     let legend_w = if entries.is_empty() {
         0
@@ -438,7 +533,9 @@ fn render(plot: &LinePlot, target: &Path) -> Result<String> {
                 )
                 .map_err(&err)?;
         }
-        for ((series, drawn), &colour) in plot.series.iter().zip(&prepared).zip(&colours) {
+        for (((series, drawn), &colour), dash) in
+            plot.series.iter().zip(&prepared).zip(&colours).zip(&dashes)
+        {
             if series.crosses {
                 let style = BLACK.stroke_width(2);
                 let points: Vec<(f64, f64)> = runs(&series.points, plot.x_scale, plot.y_scale)
@@ -451,14 +548,21 @@ fn render(plot: &LinePlot, target: &Path) -> Result<String> {
                 continue;
             }
             let style = colour.stroke_width(series.width.unwrap_or(2));
-            chart
-                .draw_series(
-                    drawn
-                        .lines
-                        .iter()
-                        .map(|l| PathElement::new(l.clone(), style)),
-                )
-                .map_err(&err)?;
+            match dash {
+                None => chart
+                    .draw_series(
+                        drawn
+                            .lines
+                            .iter()
+                            .map(|l| PathElement::new(l.clone(), style)),
+                    )
+                    .map_err(&err)?,
+                Some(((on, off), _)) => chart
+                    .draw_series(drawn.lines.iter().map(|l| {
+                        plotters::element::DashedPathElement::new(l.clone(), *on, *off, style)
+                    }))
+                    .map_err(&err)?,
+            };
             let bars = series.bars.iter().filter(|&&(x, lo, hi)| {
                 plottable(plot.x_scale, x)
                     && plottable(plot.y_scale, lo)
@@ -483,14 +587,25 @@ fn render(plot: &LinePlot, target: &Path) -> Result<String> {
                 )
                 .map_err(&err)?;
             let radius = if series.points_only { 4 } else { 3 };
-            chart
-                .draw_series(
-                    drawn
-                        .markers
-                        .iter()
-                        .map(|&p| Circle::new(p, radius, colour.filled())),
-                )
-                .map_err(&err)?;
+            match dash {
+                None => {
+                    chart
+                        .draw_series(
+                            drawn
+                                .markers
+                                .iter()
+                                .map(|&p| Circle::new(p, radius, colour.filled())),
+                        )
+                        .map_err(&err)?;
+                }
+                Some((_, shape)) => {
+                    for p in &drawn.markers {
+                        shape
+                            .draw(&root, chart.backend_coord(p), colour)
+                            .map_err(&err)?;
+                    }
+                }
+            }
         }
 
         let (xr, yr) = chart.plotting_area().get_pixel_range();
@@ -527,6 +642,11 @@ fn render(plot: &LinePlot, target: &Path) -> Result<String> {
             }
             let style = TextStyle::from((FONT, POINT_LABEL_PX).into_font()).color(&BLACK);
             for placed in labels::place(&texts, &markers, &line_points, area, POINT_LABEL_PX) {
+                if let Some(point) = placed.leader {
+                    let end = placed.nearest_edge(point, POINT_LABEL_PX);
+                    root.draw(&PathElement::new(vec![point, end], LEADER.stroke_width(1)))
+                        .map_err(&err)?;
+                }
                 root.draw(&Text::new(
                     placed.text,
                     placed.at,
@@ -594,6 +714,7 @@ mod tests {
             assert!(svg.contains(text), "missing {text:?}");
         }
         assert!(svg.contains("#1F77B4") || svg.contains("#1f77b4"));
+        crate::report::tests_support::assert_no_text_overlaps(&svg);
         // Same input, same bytes.
         assert_eq!(svg, line_plot_svg(&plot).unwrap());
     }
@@ -614,6 +735,84 @@ mod tests {
             })
             .max()
             .unwrap_or(0)
+    }
+
+    #[test]
+    fn crowded_point_labels_do_not_overlap() {
+        // Twenty labelled variants around one base point (the tradeoff's picture), on
+        // log axes, plus a line through them: no two texts' boxes intersect.
+        let points: Vec<(f64, f64)> = (0..20)
+            .map(|i| {
+                (
+                    0.01 * (1.0 + 0.01 * i as f64),
+                    0.03 * (1.0 + 0.02 * (i % 5) as f64),
+                )
+            })
+            .collect();
+        let labels: Vec<String> = (0..20).map(|i| format!("baumgarte α = β = {i}")).collect();
+        let series = [
+            Series::points("variants", points).with_labels(labels),
+            Series::new("dt", vec![(0.005, 0.02), (0.02, 0.04)]),
+        ];
+        let mut plot = LinePlot::new("Crowd", "wall [s]", "error [m]", &series);
+        plot.x_scale = Scale::Log;
+        plot.y_scale = Scale::Log;
+        let svg = line_plot_svg(&plot).unwrap();
+        for i in 0..20 {
+            assert!(
+                svg.contains(&format!("baumgarte α = β = {i}\n")),
+                "label {i}"
+            );
+        }
+        crate::report::tests_support::assert_no_text_overlaps(&svg);
+        // Labels set apart from their point are joined to it by a grey leader line.
+        assert!(svg.contains("#808080"), "leader lines");
+    }
+
+    #[test]
+    fn coinciding_series_are_dashed_and_say_so_in_the_legend() {
+        let a: Vec<(f64, f64)> = (1..=6).map(|i| (i as f64, 1e-2 * i as f64)).collect();
+        let mut b = a.clone();
+        b.push((7.0, 1.0));
+        let series = [
+            Series::new("predict", a.clone()),
+            Series::new("passive", b),
+            Series::new("passive, no lines", a),
+            Series::new("reset", vec![(1.0, 0.5), (6.0, 0.6)]),
+        ];
+        let mut plot = LinePlot::new("Coupling", "τ [ms]", "error [m]", &series);
+        plot.markers = true;
+        let svg = line_plot_svg(&plot).unwrap();
+        let t = texts(&svg);
+        let has = |s: &str| t.iter().any(|x| x.2.contains(s));
+        assert!(has("predict") && has("reset"), "{t:?}");
+        // The legend wraps long rows: look for the words.
+        assert!(has("(dashed, lies on"), "{t:?}");
+        assert!(
+            !t.iter().any(|x| x.2.starts_with("predict (dashed")),
+            "{t:?}"
+        );
+        assert!(!t.iter().any(|x| x.2.starts_with("reset (dashed")), "{t:?}");
+        assert!(
+            t.iter().any(|x| x.2.starts_with("passive (dashed")),
+            "{t:?}"
+        );
+        // Different markers for the two that lie on `predict`: triangles and squares.
+        assert!(svg.contains("<polygon"), "triangle markers");
+        assert!(svg.contains("fill=\"none\""), "open squares");
+        assert_eq!(
+            lies_on(
+                &plot,
+                &series
+                    .iter()
+                    .map(|s| prepare(s, &plot, &Axis::fit(Scale::Linear, [1.0, 7.0])))
+                    .collect::<Vec<_>>(),
+                &Axis::fit(Scale::Linear, [1.0, 7.0]),
+                &Axis::fit(Scale::Linear, [0.0, 1.0]),
+            ),
+            vec![None, Some(0), Some(0), None]
+        );
+        crate::report::tests_support::assert_no_text_overlaps(&svg);
     }
 
     #[test]
@@ -690,6 +889,7 @@ mod tests {
         for label in ["euler", "symplectic_euler", "rk4", "integrator", "dt, rk4"] {
             assert!(texts.iter().any(|t| t.2 == label), "missing {label:?}");
         }
+        crate::report::tests_support::assert_no_text_overlaps(&svg);
     }
 
     #[test]

@@ -718,6 +718,7 @@ mod tests {
         let owned = 3 * (1 + 5 + 8);
         assert_eq!(filled(&svg, SLOT_BG), owned + 1, "slot backgrounds");
         assert_eq!(filled(&svg, GUARD), 3 * 20 + 1, "a guard band per slot");
+        crate::report::tests_support::assert_no_text_overlaps(&svg);
         // Same input, same bytes.
         assert_eq!(svg, slot_timeline_svg(&t).unwrap());
     }

@@ -126,21 +126,31 @@ pub(super) fn write_plots(out: &Path, world: &CoSim, exp: &Experiment) -> Result
         Problem::Constrained { .. } => "cost C [m]",
         Problem::Unconstrained { .. } => "objective C + bΣk/τ [m]",
     };
-    let mut series = vec![step_series(live.to_string(), exp, &|i| {
-        exp.windows[i].live.objective
-    })];
+    // The live method stands out (black, 3 px, drawn last so that nothing covers it);
+    // the baselines it is measured against stay distinguishable but set back (their
+    // palette colours, lighter, 1 px).
+    let mut series = Vec::new();
     for (j, b) in exp.baseline_names().into_iter().enumerate() {
-        series.push(step_series(b, exp, &|i| {
-            exp.windows[i]
-                .baselines
-                .get(j)
-                .map_or(f64::NAN, |b| b.candidate.objective)
-        }));
+        series.push(
+            step_series(b, exp, &|i| {
+                exp.windows[i]
+                    .baselines
+                    .get(j)
+                    .map_or(f64::NAN, |b| b.candidate.objective)
+            })
+            .styled(crate::report::palette(j + 1, 0.25), 1),
+        );
     }
+    series.push(
+        step_series(format!("{live} (live)"), exp, &|i| {
+            exp.windows[i].live.objective
+        })
+        .styled([0, 0, 0], 3),
+    );
     write_line_plot(
         &out.join("cost_methods.svg"),
         &LinePlot {
-            title: &format!("{name} — cost per window by method"),
+            title: &format!("{name} — cost per window by method (black: the live one)"),
             x_label: "time t [s]",
             y_label: cost_label,
             series: &series,

@@ -66,19 +66,48 @@ fn locate(e: Error, sets: &[String]) -> Error {
     let Error::Invalid { path, message } = e else {
         return e;
     };
-    let message = match message.rfind(" (line ") {
-        Some(at) if message.ends_with(')') => message[..at].to_string(),
-        _ => message,
-    };
-    let set_here = sets.iter().rev().find(|set| {
-        set.split_once('=')
-            .is_some_and(|(pointer, _)| pointer_as_path(pointer) == path)
-    });
-    let message = match set_here {
+    let message = without_position(message);
+    let message = match set_for(&path, sets) {
         Some(set) => format!("{message} (set by `--set {set}`)"),
         None => format!("{message} (in the file with the --set overrides applied)"),
     };
     Error::Invalid { path, message }
+}
+
+/// `message` without a trailing `(line L, column C)`, which would point into JSON that
+/// the overrides rewrote.
+fn without_position(message: String) -> String {
+    match message.rfind(" (line ") {
+        Some(at) if message.ends_with(')') => message[..at].to_string(),
+        _ => message,
+    }
+}
+
+/// The last of `sets` whose pointer names the field `path` (`channels[0].tau`).
+fn set_for<'a>(path: &str, sets: &'a [String]) -> Option<&'a String> {
+    sets.iter().rev().find(|set| {
+        set.split_once('=')
+            .is_some_and(|(pointer, _)| pointer_as_path(pointer) == path)
+    })
+}
+
+/// A validation error of a scenario built from a file with `sets` applied and then
+/// changed further (a sweep's points): when an override set the field the error names,
+/// the error names that override instead of a position in the rewritten JSON;
+/// otherwise it is returned as it was. `later` lists the pointers set after the
+/// overrides (the sweep's own overrides and axes), which then own the field.
+pub(crate) fn name_override(e: Error, sets: &[String], later: &[String]) -> Error {
+    let Error::Invalid { path, message } = e else {
+        return e;
+    };
+    let owned_later = later.iter().any(|p| pointer_as_path(p) == path);
+    match set_for(&path, sets) {
+        Some(set) if !owned_later => Error::Invalid {
+            message: format!("{} (set by `--set {set}`)", without_position(message)),
+            path,
+        },
+        _ => Error::Invalid { path, message },
+    }
 }
 
 /// A JSON pointer written as the dotted path errors name fields by: `/channels/0/tau`

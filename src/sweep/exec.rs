@@ -104,7 +104,7 @@ impl Keep {
 }
 
 /// Options of `dsmcosim sweep`.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct Options {
     /// What each point keeps of its run.
     pub keep: Keep,
@@ -113,6 +113,9 @@ pub struct Options {
     pub resume: bool,
     /// Run only this shard's points.
     pub shard: Option<Shard>,
+    /// `--set POINTER=VALUE` overrides of the base scenario, applied in order before the
+    /// sweep's own overrides and axes (as `run --set` applies them to a scenario file).
+    pub sets: Vec<String>,
 }
 
 /// What a sweep did.
@@ -150,9 +153,9 @@ struct Defined {
 }
 
 /// Reads the sweep file and its base, and checks every point.
-fn load(sweep_path: &Path) -> Result<Loaded> {
-    let d = define(sweep_path)?;
-    let points = expand(&d.plan, &d.base, &d.base_label)?;
+fn load(sweep_path: &Path, sets: &[String]) -> Result<Loaded> {
+    let d = define(sweep_path, sets)?;
+    let points = expand(&d.plan, &d.base, &d.base_label, sets)?;
     Ok(Loaded {
         plan: d.plan,
         points,
@@ -161,29 +164,71 @@ fn load(sweep_path: &Path) -> Result<Loaded> {
     })
 }
 
-/// Reads the sweep file and its base and checks the definition (axes, counts, labels).
-fn define(sweep_path: &Path) -> Result<Defined> {
+/// Reads the sweep file and its base (with `sets` applied) and checks the definition
+/// (axes, counts, labels).
+fn define(sweep_path: &Path, sets: &[String]) -> Result<Defined> {
     let (file, text) = file::load(sweep_path)?;
     let plan = plan(&file)?;
     let base_path: PathBuf = match sweep_path.parent() {
         Some(dir) => dir.join(&file.base),
         None => PathBuf::from(&file.base),
     };
-    let bytes = crate::input::read(&base_path)?;
+    let bytes =
+        crate::input::read(&base_path).map_err(|e| missing_base(e, &file.base, &base_path))?;
     let label = base_path.display().to_string();
-    let base: Value = serde_json::from_slice(&bytes).map_err(|e| Error::Parse {
+    let mut base: Value = serde_json::from_slice(&bytes).map_err(|e| Error::Parse {
         file: label.clone(),
         message: e.to_string(),
         line: e.line(),
         column: e.column().max(1),
     })?;
+    if sets.len() > crate::scenario::overrides::MAX_OVERRIDES {
+        return Err(Error::invalid(
+            "--set",
+            format!(
+                "{} overrides; at most {}",
+                sets.len(),
+                crate::scenario::overrides::MAX_OVERRIDES
+            ),
+        ));
+    }
+    // The base's digest (which `--resume` and `sweep-merge` compare) covers the
+    // overrides: the same file under other `--set`s is another base.
+    let mut digest = blake3::Hasher::new();
+    digest.update(&bytes);
+    for set in sets {
+        crate::scenario::overrides::apply(&mut base, set)?;
+        digest.update(b"\n--set ").update(set.as_bytes());
+    }
     Ok(Defined {
         plan,
         base,
-        base_label: label,
-        base_digest: blake3::hash(&bytes).to_hex().to_string(),
+        base_label: if sets.is_empty() {
+            label
+        } else {
+            format!("{label} with --set")
+        },
+        base_digest: digest.finalize().to_hex().to_string(),
         text,
     })
+}
+
+/// A base file that does not exist is an input error (exit 2) naming `base` and where
+/// it was looked for; other read failures stay what they are.
+fn missing_base(e: Error, base: &str, resolved: &Path) -> Error {
+    match &e {
+        Error::Io { source, .. } if source.kind() == std::io::ErrorKind::NotFound => {
+            Error::invalid(
+                "base",
+                format!(
+                    "no file {} (`base` {base:?} is resolved relative to the sweep file's \
+                     directory); fix the path in the sweep file",
+                    resolved.display()
+                ),
+            )
+        }
+        _ => e,
+    }
 }
 
 /// What `dsmcosim validate` says about a sweep file: its definition holds and the
@@ -213,9 +258,14 @@ pub struct Checked {
 /// 1 000 steps, a combination that is not an extreme one) is refused by `sweep`, which
 /// checks every point before it runs any.
 pub fn check(sweep_path: &Path) -> Result<Checked> {
-    let d = define(sweep_path)?;
+    check_with(sweep_path, &[])
+}
+
+/// [`check`] of the sweep with `--set` overrides `sets` applied to its base.
+pub fn check_with(sweep_path: &Path, sets: &[String]) -> Result<Checked> {
+    let d = define(sweep_path, sets)?;
     let indices = checked_points(&d.plan);
-    let points = expand_points(&d.plan, &d.base, &d.base_label, &indices)?;
+    let points = expand_points(&d.plan, &d.base, &d.base_label, &indices, sets)?;
     let mut warnings = Vec::new();
     for p in &points {
         let scenario = crate::scenario::parse_str(&p.text, &p.key)?;
@@ -252,7 +302,7 @@ pub fn check(sweep_path: &Path) -> Result<Checked> {
 /// index order) of a point that could not run is the error, after every other point
 /// has finished and written its `done.json`.
 pub fn run(sweep_path: &Path, out: &Path, options: &Options) -> Result<Report> {
-    let loaded = load(sweep_path)?;
+    let loaded = load(sweep_path, &options.sets)?;
     if !options.resume && (out.join("sweep.json").exists() || out.join("points").exists()) {
         return Err(Error::invalid(
             "--out",

@@ -7,7 +7,9 @@
 //! several points, under three or more axes, show their mean).
 //!
 //! An axis whose values are not all numbers is drawn at the index of each value, and
-//! its label says so. Legends name a value by the axis's `labels` entry when the sweep
+//! its label says so. A numeric x axis whose values span two decades or more (a drift
+//! of 0–30 000 ppm) is a log axis, 0 drawn a decade below the smallest positive value,
+//! as its label says; the heatmap turns long value names under its cells. Legends name a value by the axis's `labels` entry when the sweep
 //! file gives one, else by the value itself when it is at most 16 characters, else by
 //! `#<index>`.
 //!
@@ -22,7 +24,7 @@ use super::file::Combine;
 use super::points::{Axis, Plan};
 use super::record::Record;
 use crate::error::Result;
-use crate::report::{write_heatmap, write_line_plot, Heatmap, LinePlot, Series};
+use crate::report::{write_heatmap, write_line_plot, Heatmap, LinePlot, Scale, Series};
 
 /// Label of the mean cost.
 const COST: &str = "mean cost C [m]";
@@ -179,6 +181,10 @@ fn cost_vs(out: &Path, plan: &Plan, records: &[Record], metric: &Metric) -> Resu
         .unwrap_or(0);
     let draws: Vec<usize> = draws.into_iter().filter(|&k| k != xa).collect();
     let (x, x_label) = coordinates(&plan.axes[xa]);
+    let (x, x_label, x_scale) = match plan.axes[xa].numbers().and_then(|_| log_axis(&x)) {
+        Some((x, note)) => (x, format!("{x_label}, {note}"), Scale::Log),
+        None => (x, x_label, Scale::Linear),
+    };
     let others: Vec<usize> = (0..plan.axes.len())
         .filter(|&k| k != xa && !draws.contains(&k))
         .collect();
@@ -264,9 +270,38 @@ fn cost_vs(out: &Path, plan: &Plan, records: &[Record], metric: &Metric) -> Resu
         &out.join(format!("{}_vs_{name}.svg", metric.file)),
         &LinePlot {
             markers: true,
+            x_scale,
             ..LinePlot::new(&title, &x_label, metric.label, &series)
         },
     )
+}
+
+/// Values that span two decades or more (largest over smallest positive ≥ 100) and are
+/// never negative go on a log axis, which a linear one would squeeze into a sliver at
+/// its left; a value 0, which a log axis cannot place, is drawn a decade below the
+/// smallest positive value and the axis label says so. Returns the coordinates and that
+/// note, or `None` for a linear axis.
+fn log_axis(x: &[f64]) -> Option<(Vec<f64>, String)> {
+    if x.iter().any(|&v| v < 0.0 || !v.is_finite()) {
+        return None;
+    }
+    let positive = x.iter().copied().filter(|&v| v > 0.0);
+    let lo = positive.clone().fold(f64::INFINITY, f64::min);
+    let hi = positive.fold(0.0, f64::max);
+    if !(lo.is_finite() && hi / lo >= 100.0) {
+        return None;
+    }
+    let zero_at = lo / 10.0;
+    let note = if x.contains(&0.0) {
+        format!("log axis (0 drawn at {})", crate::error::num(zero_at))
+    } else {
+        "log axis".to_string()
+    };
+    let x = x
+        .iter()
+        .map(|&v| if v == 0.0 { zero_at } else { v })
+        .collect();
+    Some((x, note))
 }
 
 /// `cost_heatmap.svg` over the first two axes: one equally wide cell per value of
@@ -338,4 +373,24 @@ fn heatmap(out: &Path, plan: &Plan, records: &[Record]) -> Result<()> {
             classes: None,
         },
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::log_axis;
+
+    #[test]
+    fn values_over_decades_go_on_a_log_axis_with_zero_a_decade_below() {
+        let drift = [0.0, 300.0, 1000.0, 3000.0, 10000.0, 30000.0];
+        let (x, note) = log_axis(&drift).expect("a log axis");
+        assert_eq!(x, [30.0, 300.0, 1000.0, 3000.0, 10000.0, 30000.0]);
+        assert_eq!(note, "log axis (0 drawn at 30)");
+        let (x, note) = log_axis(&[1.0, 10.0, 100.0]).unwrap();
+        assert_eq!((x, note.as_str()), (vec![1.0, 10.0, 100.0], "log axis"));
+        // Less than two decades, a negative value or nothing positive: linear.
+        assert!(log_axis(&[0.002, 0.004, 0.008]).is_none());
+        assert!(log_axis(&[-1.0, 10.0, 1000.0]).is_none());
+        assert!(log_axis(&[0.0, 0.0]).is_none());
+        assert!(log_axis(&[]).is_none());
+    }
 }

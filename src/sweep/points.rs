@@ -651,15 +651,16 @@ pub fn checked_points(plan: &Plan) -> Vec<usize> {
         .collect()
 }
 
-/// Builds and validates every point's scenario from `base` (the base scenario's JSON;
-/// `base_label` names it in messages).
+/// Builds and validates every point's scenario from `base` (the base scenario's JSON,
+/// the command line's `--set` overrides `sets` applied; `base_label` names it in
+/// messages).
 ///
 /// Every point is checked before any is returned; the first failure (in index order) is
 /// the error, naming the axis (`axes[1].pointer: …`) or the point and its axis values
 /// (`point p3 (drift = 50, T = 0.5): dt: …`).
-pub fn expand(plan: &Plan, base: &Value, base_label: &str) -> Result<Vec<Point>> {
+pub fn expand(plan: &Plan, base: &Value, base_label: &str, sets: &[String]) -> Result<Vec<Point>> {
     let all: Vec<usize> = (0..plan.points.len()).collect();
-    expand_points(plan, base, base_label, &all)
+    expand_points(plan, base, base_label, &all, sets)
 }
 
 /// [`expand`] of the points `indices` (ascending) only: the first failure in their order
@@ -669,6 +670,7 @@ pub fn expand_points(
     base: &Value,
     base_label: &str,
     indices: &[usize],
+    sets: &[String],
 ) -> Result<Vec<Point>> {
     if !base.is_object() {
         return Err(Error::invalid(
@@ -699,19 +701,33 @@ pub fn expand_points(
     };
     let results: Vec<Result<Point>> = indices
         .par_iter()
-        .map(|&i| point(plan, base, base_seed, i))
+        .map(|&i| point(plan, base, base_seed, i, sets))
         .collect();
     results.into_iter().collect()
 }
 
 /// Builds and validates point `i`, with the checks `run` makes before it starts.
-fn point(plan: &Plan, base: &Value, base_seed: Option<u64>, i: usize) -> Result<Point> {
+fn point(
+    plan: &Plan,
+    base: &Value,
+    base_seed: Option<u64>,
+    i: usize,
+    sets: &[String],
+) -> Result<Point> {
     let (doc, created) = build(plan, base, base_seed, i)?;
     let mut text = serde_json::to_string_pretty(&doc)
         .map_err(|e| Error::invalid(format!("point p{i}"), e.to_string()))?;
     text.push('\n');
     let scenario = crate::scenario::parse_str(&text, &format!("{}_{}", plan.name, plan.key(i)))
         .map_err(|e| {
+            // A field a `--set` gave names that override, unless the sweep set it later.
+            let later: Vec<String> = plan
+                .overrides
+                .iter()
+                .map(|(p, _)| p.to_string())
+                .chain(plan.axes.iter().map(|a| a.pointer.to_string()))
+                .collect();
+            let e = crate::scenario::overrides::name_override(e, sets, &later);
             let note: String = created
                 .iter()
                 .map(|&k| {

@@ -104,6 +104,7 @@ fn junit(dir: &Path) -> Vec<Case> {
     let suite = suites[0];
     assert_eq!(suite.attribute("name"), Some("dsmcosim.check"));
     let mut cases = Vec::new();
+    let mut times = Vec::new();
     for case in suite.children().filter(|n| n.has_tag_name("testcase")) {
         assert_eq!(
             case.attribute("classname"),
@@ -115,6 +116,7 @@ fn junit(dir: &Path) -> Vec<Case> {
             .and_then(|t| t.parse().ok())
             .unwrap_or_else(|| panic!("a testcase without a time in seconds:\n{text}"));
         assert!(time >= 0.0);
+        times.push(time);
         let problem = case
             .children()
             .find(|n| n.has_tag_name("failure") || n.has_tag_name("error"))
@@ -137,7 +139,16 @@ fn junit(dir: &Path) -> Vec<Case> {
             .count()
             .to_string()
     };
+    // The suite's time is the whole check's wall time: it contains every testcase's
+    // interval, so it is at least the longest (the scenarios run in parallel, so it is
+    // not their sum: src/check/junit.rs's unit test pins that rendering).
+    let longest = times.iter().copied().fold(0.0, f64::max);
     for element in [root, suite] {
+        let time: f64 = element
+            .attribute("time")
+            .and_then(|t| t.parse().ok())
+            .unwrap_or_else(|| panic!("a suite without a time in seconds:\n{text}"));
+        assert!(time >= longest, "suite time below a testcase's:\n{text}");
         assert_eq!(
             element.attribute("tests"),
             Some(cases.len().to_string().as_str())
@@ -202,6 +213,20 @@ fn two_scenarios_that_match_exit_0() {
     );
     assert_eq!(v["exit_code"], 0);
     assert_eq!(v["totals"]["match"], 2);
+    // The JSON verdict's totals: the check's own wall time (the JUnit suite's) and the
+    // scenarios' times added up.
+    let summed: f64 = v["scenarios"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["wall_seconds"].as_f64().unwrap())
+        .sum();
+    let totals = &v["totals"];
+    assert!(
+        (totals["summed_seconds"].as_f64().unwrap() - summed).abs() < 1e-9,
+        "{totals}"
+    );
+    assert!(totals["wall_seconds"].as_f64().is_some(), "{totals}");
     for s in v["scenarios"].as_array().unwrap() {
         assert_eq!(s["identical"], true);
         assert_eq!(s["digest"]["equal"], true);

@@ -297,3 +297,68 @@ fn a_coupling_study_past_the_step_limit_is_refused_before_it_runs() {
     );
     assert!(!out.exists());
 }
+
+#[test]
+fn a_sweep_without_its_base_names_base_and_where_it_looked() {
+    let dir = scratch("conventions_missing_base");
+    let sub = dir.join("sweeps");
+    std::fs::create_dir_all(&sub).unwrap();
+    let sweep = write_json(
+        &sub,
+        "study.json",
+        &json!({"name": "s", "base": "../scenarios/nowhere.json",
+                "axes": [{"name": "draw", "pointer": "/seed", "values": [1, 2]}]}),
+    );
+    let out = dir.join("out");
+    for args in [
+        vec![
+            "sweep",
+            sweep.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        vec!["validate", sweep.to_str().unwrap()],
+    ] {
+        let o = run(&args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", said(&o));
+        let e = String::from_utf8_lossy(&o.stderr);
+        let resolved = sub.join("../scenarios/nowhere.json");
+        for want in [
+            "base: ",
+            "resolved relative to the sweep file",
+            resolved.to_str().unwrap(),
+        ] {
+            assert!(e.contains(want), "{args:?}: no {want:?}: {}", said(&o));
+        }
+    }
+    assert!(!out.exists(), "nothing written");
+}
+
+#[test]
+fn max_memory_takes_sizes_with_units() {
+    let scenario = repo().join("scenarios/grid16_space_fixed.json");
+    let scenario = scenario.to_str().unwrap();
+    for ok in ["16G", "16GiB", "1.5GiB", "512M", "2000000000", "16GB"] {
+        let o = run(&["validate", scenario, "--max-memory", ok]);
+        assert!(o.status.success(), "{ok}: {}", said(&o));
+    }
+    // Too small a size is the budget's refusal, naming the flag.
+    let o = run(&["validate", scenario, "--max-memory", "1K"]);
+    assert_eq!(o.status.code(), Some(2), "{}", said(&o));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("--max-memory"),
+        "{}",
+        said(&o)
+    );
+    // Bad input: exit 2 naming the flag and showing what it takes.
+    for (bad, want) in [("16X", "unknown unit"), ("G", "must be a number of bytes")] {
+        let o = run(&["validate", scenario, "--max-memory", bad]);
+        assert_eq!(o.status.code(), Some(2), "{bad}: {}", said(&o));
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            e.contains("--max-memory") && e.contains(want) && e.contains("16G"),
+            "{bad}: {}",
+            said(&o)
+        );
+    }
+}
