@@ -425,3 +425,30 @@ fn bad_joints_are_refused_naming_the_field() {
         assert!(e.starts_with(want), "{joint}: {e}");
     }
 }
+
+/// Joint rows go through every multiplier solve: the double pendulum under CG with a
+/// generous budget and under the reused factor follows the exact solve's run.
+#[test]
+fn joints_solve_alike_exactly_and_iteratively() {
+    let with = |solver: Value| {
+        let mut v = double_pendulum(1.0, 0.001);
+        v["solver"] = solver;
+        let s = scenario(v);
+        let mut ends = Vec::new();
+        simulate(&s, |_, _, st| ends.push([st.p[0], st.p[1]]));
+        ends
+    };
+    let exact = with(json!({"kind": "cholesky"}));
+    for solver in [
+        json!({"kind": "cg", "max_iterations": 200, "tolerance": 1e-14}),
+        json!({"kind": "cholesky_pcg"}),
+    ] {
+        let other = with(solver.clone());
+        let worst = exact
+            .iter()
+            .zip(&other)
+            .map(|(a, b)| (a[0] - b[0]).norm().max((a[1] - b[1]).norm()))
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-9, "{solver}: {worst} m from the exact solve");
+    }
+}
