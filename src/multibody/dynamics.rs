@@ -176,8 +176,6 @@ impl System {
                 return Err(EvalError::NonFinite { link: l });
             }
             if self.rigid {
-                self.ws.ra[l] = row.ra;
-                self.ws.rb[l] = row.rb;
                 self.geo.ca[l] = row.ca;
                 self.geo.cb[l] = row.cb;
             }
@@ -253,12 +251,15 @@ pub(crate) struct RowKinematics {
     pub wd: f64,
     pub jdv: f64,
     pub n: Vector3<f64>,
+    /// `c_a`, `c_b` (zero on point masses, which carry no angular Jacobian).
     pub ca: Vector3<f64>,
     pub cb: Vector3<f64>,
-    /// World-frame anchor offsets `R r_a`, `R r_b` (zero on point masses and for the
-    /// world's side).
+    /// World-frame anchor offsets `R r_a`, `R r_b` of a distance or offset row (zero on
+    /// point masses, for the world's side and for an alignment row).
     pub ra: Vector3<f64>,
     pub rb: Vector3<f64>,
+    /// An alignment row's `ċ` with the bodies' ω held (zero for the other rows).
+    pub c_dot: Vector3<f64>,
     /// For a distance row: the anchors' distance `d` (1 for the other rows).
     pub d: f64,
 }
@@ -269,98 +270,94 @@ impl RowKinematics {
     }
 }
 
-/// The kinematics of `link` in `state` (see [`RowKind`]).
+/// The kinematics of `link` in `state` (see [`RowKind`]). Only what the row's kind and
+/// the body model need is computed: this runs for every row at every rate evaluation.
 pub(crate) fn row_kinematics(link: &Link, state: &State, rigid: bool) -> RowKinematics {
     let (a, b) = (link.a, link.b);
-    let turn = |i: usize, r: &Vector3<f64>| UnitQuaternion::new_normalize(state.q[i]) * r;
     let zero = Vector3::zeros();
+    let rotation = |i: usize| UnitQuaternion::new_normalize(state.q[i]);
+    if let RowKind::Align(axes) = &link.kind {
+        // Joints run on rigid bodies only (validation chooses them).
+        let uw = rotation(a) * axes.u;
+        let (vw, wb) = if link.world {
+            (axes.v, zero)
+        } else {
+            (rotation(b) * axes.v, state.omega[b])
+        };
+        let wa = state.omega[a];
+        let c = uw.cross(&vw);
+        let rel = wa - wb;
+        // d/dt of c with the bodies' ω held: what J̇ v adds.
+        let c_dot = wa.cross(&uw).cross(&vw) + uw.cross(&wb.cross(&vw));
+        return RowKinematics {
+            w: uw.dot(&vw),
+            wd: rel.dot(&c),
+            jdv: rel.dot(&c_dot),
+            n: zero,
+            ca: c,
+            cb: c,
+            ra: zero,
+            rb: zero,
+            c_dot,
+            d: 1.0,
+        };
+    }
     // Side b: a body, or the world's fixed point.
-    let (pb, vb, wb, rb) = if link.world {
-        (link.anchor_b, zero, zero, zero)
-    } else if rigid {
-        (
-            state.p[b],
-            state.v[b],
-            state.omega[b],
-            turn(b, &link.anchor_b),
-        )
+    let (pb, vb) = if link.world {
+        (link.anchor_b, zero)
     } else {
-        (state.p[b], state.v[b], zero, zero)
-    };
-    let (wa, ra) = if rigid {
-        (state.omega[a], turn(a, &link.anchor_a))
-    } else {
-        (zero, zero)
+        (state.p[b], state.v[b])
     };
     // In this order of operations (centres, then the anchors' offsets): a distance
     // link's bits as they were before joints existed.
     let (mut delta, mut u) = (state.p[a] - pb, state.v[a] - vb);
+    let (mut ra, mut rb, mut spin) = (zero, zero, zero);
     if rigid {
+        let wa = state.omega[a];
+        ra = rotation(a) * link.anchor_a;
+        let wb = if link.world {
+            zero
+        } else {
+            rb = rotation(b) * link.anchor_b;
+            state.omega[b]
+        };
         delta += ra - rb;
         u += wa.cross(&ra) - wb.cross(&rb);
+        // The anchors' centripetal accelerations' difference.
+        spin = wa.cross(&wa.cross(&ra)) - wb.cross(&wb.cross(&rb));
     }
-    // The anchors' centripetal accelerations' difference (zero on point masses).
-    let spin = wa.cross(&wa.cross(&ra)) - wb.cross(&wb.cross(&rb));
-    match &link.kind {
-        RowKind::Distance => {
+    let (w, wd, mut jdv, n, d) = match link.kind {
+        RowKind::Offset(k) => {
+            let k = usize::from(k);
+            let mut n = zero;
+            n[k] = 1.0;
+            (delta[k], u[k], spin[k], n, 1.0)
+        }
+        _ => {
             let d = delta.norm();
             let n = delta / d;
             let wd = n.dot(&u);
-            let mut jdv = (u.norm_squared() - wd * wd) / d;
-            if rigid {
-                jdv += n.dot(&spin);
-            }
-            RowKinematics {
-                w: d - link.length,
-                wd,
-                jdv,
-                n,
-                ca: ra.cross(&n),
-                cb: rb.cross(&n),
-                ra,
-                rb,
-                d,
-            }
+            (d - link.length, wd, (u.norm_squared() - wd * wd) / d, n, d)
         }
-        RowKind::Offset(k) => {
-            let k = usize::from(*k);
-            let mut n = zero;
-            n[k] = 1.0;
-            RowKinematics {
-                w: delta[k],
-                wd: u[k],
-                jdv: spin[k],
-                n,
-                ca: ra.cross(&n),
-                cb: rb.cross(&n),
-                ra,
-                rb,
-                d: 1.0,
-            }
+    };
+    let (mut ca, mut cb) = (zero, zero);
+    if rigid {
+        if matches!(link.kind, RowKind::Distance) {
+            jdv += n.dot(&spin);
         }
-        RowKind::Align(axes) => {
-            let (ua, vb_body) = (axes.u, axes.v);
-            let uw = turn(a, &ua);
-            let vw = if link.world {
-                vb_body
-            } else {
-                turn(b, &vb_body)
-            };
-            let c = uw.cross(&vw);
-            let rel = wa - wb;
-            // d/dt of c with the bodies' ω held: what J̇ v adds.
-            let c_dot = wa.cross(&uw).cross(&vw) + uw.cross(&wb.cross(&vw));
-            RowKinematics {
-                w: uw.dot(&vw),
-                wd: rel.dot(&c),
-                jdv: rel.dot(&c_dot),
-                n: zero,
-                ca: c,
-                cb: c,
-                ra,
-                rb,
-                d: 1.0,
-            }
-        }
+        ca = ra.cross(&n);
+        cb = rb.cross(&n);
+    }
+    RowKinematics {
+        w,
+        wd,
+        jdv,
+        n,
+        ca,
+        cb,
+        ra,
+        rb,
+        c_dot: zero,
+        d,
     }
 }

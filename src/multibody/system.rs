@@ -104,10 +104,6 @@ pub(crate) struct Workspace {
     pub alpha: Vec<Vector3<f64>>,
     /// World inertia per body [kg·m²] (rigid path only).
     pub inertia_world: Vec<Matrix3<f64>>,
-    /// World-frame anchor offsets `R r_a`, `R r_b` per link [m] (rigid path only).
-    pub ra: Vec<Vector3<f64>>,
-    /// See `ra`.
-    pub rb: Vec<Vector3<f64>>,
     /// Constraint value w = |P_a − P_b| − L per link [m].
     pub w: Vec<f64>,
     /// ẇ = J v [m/s].
@@ -215,8 +211,6 @@ impl System {
                 acc: vec![v3(); solver_bodies],
                 alpha: vec![v3(); nr],
                 inertia_world: vec![Matrix3::zeros(); nr],
-                ra: vec![v3(); nlr],
-                rb: vec![v3(); nlr],
                 w: vec![0.0; nl],
                 wd: vec![0.0; nl],
                 wdd: vec![0.0; nl],
@@ -400,7 +394,7 @@ impl System {
         body: usize,
     ) -> (Vector3<f64>, Vector3<f64>) {
         let link = &self.links[l];
-        if link.kind != RowKind::Distance || link.world {
+        if link.joint.is_some() {
             let [f, t, _, _] = self.joint_row_load_on(state, l, body);
             return (f, t);
         }
@@ -441,7 +435,7 @@ impl System {
         body: usize,
     ) -> [Vector3<f64>; 4] {
         let link = &self.links[l];
-        if link.kind != RowKind::Distance || link.world {
+        if link.joint.is_some() {
             return self.joint_row_load_on(state, l, body);
         }
         let (mut ra, mut rb) = (Vector3::zeros(), Vector3::zeros());
@@ -479,8 +473,8 @@ impl System {
         }
     }
 
-    /// [`link_load_and_rate_on`](Self::link_load_and_rate_on) for a joint's row or a
-    /// row held to the world: force `n z`, torque `c z` on `a` (`−n z`, `−c_b z` on `b`)
+    /// [`link_load_and_rate_on`](Self::link_load_and_rate_on) for a joint's row (rigid
+    /// bodies, as every joint's): force `n z`, torque `c z` on `a` (`−n z`, `−c_b z` on `b`)
     /// and their rates. An offset row's `n` is a fixed axis, so its force turns only
     /// with `ż`; its lever `R r` turns with the body (`ċ = (ω × R r) × n`). An
     /// alignment row has no force, and its `c = u × v` turns with both bodies.
@@ -491,41 +485,30 @@ impl System {
             Stabilizer::Smc { .. } => (state.z[l], self.k[0].z.get(l).copied().unwrap_or(0.0)),
             Stabilizer::Baumgarte { .. } => (self.ws.z_alg[l], 0.0),
         };
-        let zero = Vector3::zeros();
-        let wa = if self.rigid {
-            state.omega[link.a]
-        } else {
-            zero
-        };
-        let wb = if self.rigid && !link.world {
-            state.omega[link.b]
-        } else {
-            zero
-        };
-        let c_dot = match &link.kind {
-            RowKind::Align(axes) => {
-                let (u, v) = (axes.u, axes.v);
-                let turn = |i: usize, x: &Vector3<f64>| {
-                    nalgebra::UnitQuaternion::new_normalize(state.q[i]) * x
+        // `ċ_a`, `ċ_b`: an alignment row's from its kinematics; an offset row's levers
+        // turn with their bodies (the world's side does not turn).
+        let (ca_dot, cb_dot) = match &link.kind {
+            RowKind::Align(_) => (row.c_dot, row.c_dot),
+            _ => {
+                let wb = if link.world {
+                    Vector3::zeros()
+                } else {
+                    state.omega[link.b]
                 };
-                let uw = turn(link.a, &u);
-                let vw = if link.world { v } else { turn(link.b, &v) };
-                (wa.cross(&uw).cross(&vw) + uw.cross(&wb.cross(&vw)), None)
+                (
+                    state.omega[link.a].cross(&row.ra).cross(&row.n),
+                    wb.cross(&row.rb).cross(&row.n),
+                )
             }
-            _ => (
-                wa.cross(&row.ra).cross(&row.n),
-                Some(wb.cross(&row.rb).cross(&row.n)),
-            ),
         };
         if body == link.a {
             [
                 row.n * z,
                 row.ca * z,
                 row.n * z_dot,
-                c_dot.0 * z + row.ca * z_dot,
+                ca_dot * z + row.ca * z_dot,
             ]
         } else {
-            let cb_dot = c_dot.1.unwrap_or(c_dot.0);
             [
                 -row.n * z,
                 -row.cb * z,

@@ -127,7 +127,7 @@ impl LineSet {
             let Some(l) = r.link else { continue };
             // A line is a distance link's wave model; a joint's rows stay in the
             // constraint system under the scheme's other parts.
-            if scenario.links[l].kind != crate::scenario::model::RowKind::Distance {
+            if scenario.links[l].joint.is_some() {
                 continue;
             }
             let state = routes.iter().find(|s| {
