@@ -154,10 +154,16 @@ impl LinkSpec {
     /// (`index` is the row's 0-based position), `J<j>_<r>` for row r (0-based) of joint
     /// j (1-based).
     pub fn name(&self, index: usize) -> String {
-        match self.joint {
-            Some((j, r)) => format!("J{}_{r}", j + 1),
-            None => format!("L{}", index + 1),
-        }
+        row_name(index, self.joint)
+    }
+}
+
+/// The name of constraint row `index` (0-based) that is row `joint.1` of joint
+/// `joint.0` (0-based), or a link: see [`LinkSpec::name`].
+pub fn row_name(index: usize, joint: Option<(u32, u32)>) -> String {
+    match joint {
+        Some((j, r)) => format!("J{}_{r}", j + 1),
+        None => format!("L{}", index + 1),
     }
 }
 

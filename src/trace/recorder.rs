@@ -180,7 +180,7 @@ impl Recorder {
         self.row_names
             .get(k)
             .cloned()
-            .unwrap_or_else(|| format!("L{}", k + 1))
+            .unwrap_or_else(|| crate::scenario::model::row_name(k, None))
     }
 
     /// Writes the header to `file`, which the trace goes to from now on. `body_ids[i]`
