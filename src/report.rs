@@ -133,18 +133,10 @@ pub(crate) mod tests_support {
     /// `font-size` (a glyph 0.56 em wide on average, as DejaVu Sans draws lower-case
     /// text and digits; 0.9 em tall, ascender to descender) and a `rotate(90|270, …)`.
     pub(crate) fn text_boxes(svg: &str) -> Vec<(String, (f64, f64, f64, f64))> {
-        let attr = |tag: &str, name: &str| -> Option<String> {
-            let at = tag.find(&format!(" {name}=\""))? + name.len() + 3;
-            let len = tag[at..].find('"')?;
-            Some(tag[at..at + len].to_string())
-        };
+        let attr = attribute;
         let num = |tag: &str, name: &str| attr(tag, name).and_then(|v| v.parse::<f64>().ok());
-        svg.split("<text")
-            .skip(1)
-            .filter_map(|rest| {
-                let end = rest.find('>')?;
-                let tag = &rest[..end];
-                let body = rest[end + 1..rest.find("</text>")?].trim();
+        text_elements(svg)
+            .filter_map(|(tag, body)| {
                 let body = body
                     .replace("&lt;", "<")
                     .replace("&gt;", ">")
@@ -157,12 +149,12 @@ pub(crate) mod tests_support {
                 let w = 0.56 * fs * body.chars().count() as f64;
                 let h = 0.9 * fs;
                 // Offsets of the unrotated box from the anchor.
-                let (dx0, dx1) = match attr(tag, "text-anchor").as_deref() {
+                let (dx0, dx1) = match attr(tag, "text-anchor") {
                     Some("middle") => (-w / 2.0, w / 2.0),
                     Some("end") => (-w, 0.0),
                     _ => (0.0, w),
                 };
-                let (dy0, dy1) = match attr(tag, "dy").as_deref() {
+                let (dy0, dy1) = match attr(tag, "dy") {
                     Some("0.76em") => (0.0, h),
                     Some("-0.5ex") => (-h, 0.0),
                     _ => (-h / 2.0, h / 2.0),
@@ -203,19 +195,27 @@ pub(crate) mod tests_support {
     /// `(x, y, text)` of every `<text>` element (plotters writes the text on its own
     /// line between the tag and `</text>`).
     pub(crate) fn texts(svg: &str) -> Vec<(i32, i32, String)> {
-        let attr = |tag: &str, name: &str| -> Option<i32> {
-            let at = tag.find(&format!(" {name}=\""))? + name.len() + 3;
-            let len = tag[at..].find('"')?;
-            tag[at..at + len].parse::<f64>().ok().map(|v| v as i32)
+        let at = |tag: &str, name: &str| -> Option<i32> {
+            attribute(tag, name)?.parse::<f64>().ok().map(|v| v as i32)
         };
-        svg.split("<text")
-            .skip(1)
-            .filter_map(|rest| {
-                let end = rest.find('>')?;
-                let tag = &rest[..end];
-                let body = &rest[end + 1..rest.find("</text>")?];
-                Some((attr(tag, "x")?, attr(tag, "y")?, body.trim().to_string()))
-            })
+        text_elements(svg)
+            .filter_map(|(tag, body)| Some((at(tag, "x")?, at(tag, "y")?, body.to_string())))
             .collect()
+    }
+
+    /// Every `<text>` element of `svg`: its opening tag's attributes and its trimmed
+    /// text (plotters writes the text on its own line between the tag and `</text>`).
+    fn text_elements(svg: &str) -> impl Iterator<Item = (&str, &str)> {
+        svg.split("<text").skip(1).filter_map(|rest| {
+            let end = rest.find('>')?;
+            Some((&rest[..end], rest[end + 1..rest.find("</text>")?].trim()))
+        })
+    }
+
+    /// The value of attribute `name` in an element's opening `tag`.
+    fn attribute<'a>(tag: &'a str, name: &str) -> Option<&'a str> {
+        let at = tag.find(&format!(" {name}=\""))? + name.len() + 3;
+        let len = tag[at..].find('"')?;
+        Some(&tag[at..at + len])
     }
 }

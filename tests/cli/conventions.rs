@@ -165,34 +165,23 @@ fn a_file_of_the_other_kind_or_a_mistyped_key_gets_a_pointer_to_the_fix() {
     // An output "directory" that is a file: exit 2, saying so, the file untouched.
     let notes = dir.join("notes.md");
     std::fs::write(&notes, "mine").unwrap();
-    let o = run(&[
-        "run",
-        scenario.to_str().unwrap(),
-        "-o",
-        notes.to_str().unwrap(),
-    ]);
-    assert_eq!(o.status.code(), Some(2), "{}", said(&o));
-    assert!(
-        String::from_utf8_lossy(&o.stderr).contains("is a file, not a directory"),
-        "{}",
-        said(&o)
-    );
-    assert_eq!(std::fs::read_to_string(&notes).unwrap(), "mine");
     // The same for every command that writes into an --out directory.
     let ring = repo().join("scenarios/mechanisms/ring12.json");
-    let o = run(&[
-        "coupling",
-        ring.to_str().unwrap(),
-        "-o",
-        notes.to_str().unwrap(),
-    ]);
-    assert_eq!(o.status.code(), Some(2), "{}", said(&o));
-    assert!(
-        String::from_utf8_lossy(&o.stderr).contains("is a file, not a directory"),
-        "{}",
-        said(&o)
-    );
-    assert_eq!(std::fs::read_to_string(&notes).unwrap(), "mine");
+    for (command, input) in [("run", &scenario), ("coupling", &ring)] {
+        let o = run(&[
+            command,
+            input.to_str().unwrap(),
+            "-o",
+            notes.to_str().unwrap(),
+        ]);
+        assert_eq!(o.status.code(), Some(2), "{command}: {}", said(&o));
+        assert!(
+            String::from_utf8_lossy(&o.stderr).contains("is a file, not a directory"),
+            "{command}: {}",
+            said(&o)
+        );
+        assert_eq!(std::fs::read_to_string(&notes).unwrap(), "mine");
+    }
     // A missing stored run: the command that stores it.
     let refs = dir.join("refs");
     std::fs::create_dir_all(&refs).unwrap();
