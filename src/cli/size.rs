@@ -5,6 +5,11 @@
 //! `GiB`, `TiB` are powers of 1024; `KB`, `MB`, `GB`, `TB` are powers of 1000; `B` or
 //! no unit is bytes. Units are case-insensitive (`16g` = `16G`). A fraction of a byte
 //! is rounded down.
+//!
+//! Written here rather than taken from `parse-size` or `bytesize`: both read `K`, `M`,
+//! `G` as one reading for every unit of a kind (all decimal, or all binary with their
+//! binary switch), while a memory bound wants coreutils' mix (`16G` binary, `16GB`
+//! decimal), and the whole rule is the table below.
 
 /// Parses a size in bytes (for clap's `value_parser`; clap names the flag and exits
 /// with code 2 on an error).
