@@ -61,6 +61,7 @@ pub mod cosim;
 pub mod coupling_study;
 pub mod distance;
 pub mod error;
+pub mod fmu;
 pub mod input;
 pub mod interrupt;
 pub mod kernel;
