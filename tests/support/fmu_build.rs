@@ -1,0 +1,91 @@
+//! Builds a test FMU from a C source and a model description: compiles the source with
+//! the system C compiler into a shared library and zips it with the description in the
+//! FMI 2.0 layout (`modelDescription.xml`, `binaries/linux64/<id>.so`). Shared by
+//! `tests/fmu` and `examples/build_fmus.rs`.
+
+use std::fs::File;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The test FMUs under `tests/fmus/`: each `<stem>.c` with its `<stem>.xml`; the stem
+/// is also the model identifier.
+pub const TEST_FMUS: [&str; 3] = ["msd", "pd", "faulty"];
+
+/// Builds the test FMU `stem` (one of [`TEST_FMUS`]) as `<dir>/<stem>.fmu`.
+pub fn build_test_fmu(stem: &str, dir: &Path) -> Result<PathBuf, String> {
+    let src = fmus_dir().join(format!("{stem}.c"));
+    let xml = fmus_dir().join(format!("{stem}.xml"));
+    build_fmu(&src, &xml, stem, &dir.join(format!("{stem}.fmu")))
+}
+
+/// `tests/fmus/` of this checkout.
+pub fn fmus_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fmus")
+}
+
+/// Builds `out` (a `.fmu`) from the C file `src` and the description `xml`: compiles with
+/// `$CC` (default `cc`) `-shared -fPIC -O2 -std=c99 -Wall -Werror` in a private temporary
+/// directory, with the source's directory on the include path, then zips. Returns `out`.
+pub fn build_fmu(
+    src: &Path,
+    xml: &Path,
+    model_identifier: &str,
+    out: &Path,
+) -> Result<PathBuf, String> {
+    let (platform, suffix) = if cfg!(target_os = "macos") {
+        ("darwin64", "dylib")
+    } else {
+        ("linux64", "so")
+    };
+    let tmp = tempfile::tempdir().map_err(|e| format!("temporary directory: {e}"))?;
+    let lib = tmp.path().join(format!("{model_identifier}.{suffix}"));
+    let cc = std::env::var("CC").unwrap_or_else(|_| "cc".into());
+    let include = src.parent().unwrap_or(Path::new("."));
+    let output = Command::new(&cc)
+        .args(["-shared", "-fPIC", "-O2", "-std=c99", "-Wall", "-Werror"])
+        .arg("-I")
+        .arg(include)
+        .arg("-o")
+        .arg(&lib)
+        .arg(src)
+        .arg("-lm")
+        .output()
+        .map_err(|e| format!("cannot run the C compiler '{cc}': {e}"))?;
+    if !output.status.success() {
+        return Err(format!(
+            "{cc} failed on {}: {}\n{}",
+            src.display(),
+            output.status,
+            String::from_utf8_lossy(&output.stderr)
+        ));
+    }
+    let entries = [
+        ("modelDescription.xml".to_string(), xml.to_path_buf()),
+        (
+            format!("binaries/{platform}/{model_identifier}.{suffix}"),
+            lib,
+        ),
+    ];
+    write_zip(out, &entries)?;
+    Ok(out.to_path_buf())
+}
+
+/// Writes a zip at `out` whose entries are `(name in the archive, file to store)`,
+/// deflated.
+pub fn write_zip(out: &Path, entries: &[(String, PathBuf)]) -> Result<(), String> {
+    let file = File::create(out).map_err(|e| format!("{}: {e}", out.display()))?;
+    let mut zip = zip::ZipWriter::new(file);
+    let options = zip::write::SimpleFileOptions::default()
+        .compression_method(zip::CompressionMethod::Deflated)
+        .unix_permissions(0o644);
+    for (name, path) in entries {
+        let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        zip.start_file(name.as_str(), options)
+            .and_then(|()| zip.write_all(&bytes).map_err(Into::into))
+            .map_err(|e| format!("{}: entry {name}: {e}", out.display()))?;
+    }
+    zip.finish()
+        .map_err(|e| format!("{}: {e}", out.display()))?;
+    Ok(())
+}
