@@ -1,0 +1,43 @@
+//! Building, loading and starting the test FMUs.
+
+use dsmcosim::fmu::{Fmu, Instance};
+
+use crate::fmu_build;
+
+/// Builds the test FMU `stem` in a fresh temporary directory and loads it as `name`.
+/// The build directory goes away at once: the loader works from its own copy.
+pub fn load(stem: &str, name: &str) -> Fmu {
+    let dir = tempfile::tempdir().expect("temporary directory");
+    let path = fmu_build::build_test_fmu(stem, dir.path())
+        .unwrap_or_else(|e| panic!("building {stem}.fmu: {e}"));
+    Fmu::load(name, &path).unwrap_or_else(|e| panic!("loading {stem}.fmu: {e}"))
+}
+
+/// The value reference of the variable `var`.
+pub fn vr(fmu: &Fmu, var: &str) -> u32 {
+    fmu.description()
+        .variable(var)
+        .unwrap_or_else(|| panic!("{} has no variable {var}", fmu.name()))
+        .value_reference
+}
+
+/// An instance with `params` (name, value) set, set up from t = 0 and initialized.
+pub fn start(fmu: &Fmu, instance: &str, params: &[(&str, f64)]) -> Instance {
+    let mut inst = fmu.instantiate(instance, false).expect("instantiate");
+    let refs: Vec<u32> = params.iter().map(|(n, _)| vr(fmu, n)).collect();
+    let values: Vec<f64> = params.iter().map(|&(_, v)| v).collect();
+    inst.set_real(&refs, &values).expect("set parameters");
+    inst.setup_experiment(0.0, None).expect("setup");
+    inst.enter_initialization_mode()
+        .expect("enter initialization");
+    inst.exit_initialization_mode()
+        .expect("exit initialization");
+    inst
+}
+
+/// One Real output.
+pub fn real(inst: &Instance, vr: u32) -> f64 {
+    let mut v = [f64::NAN];
+    inst.get_real(&[vr], &mut v).expect("get_real");
+    v[0]
+}

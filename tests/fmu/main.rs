@@ -1,0 +1,16 @@
+//! FMI 2.0 co-simulation FMUs (issue 31): the loader in `dsmcosim::fmu` against the
+//! test FMUs of `tests/fmus/`, built from C by each test into its own temporary
+//! directory.
+
+#[path = "../support/fmu_build.rs"]
+mod fmu_build;
+
+mod archive;
+mod capability;
+mod closed_form;
+mod crash;
+mod description;
+mod fmus;
+mod loading;
+mod states;
+mod status;
