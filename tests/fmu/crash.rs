@@ -3,9 +3,8 @@
 //! since it would end this one.
 
 use std::os::unix::process::ExitStatusExt;
-use std::process::Command;
 
-use crate::fmus::{load, vr};
+use crate::fmus::{load, rerun_self, vr};
 
 const CHILD: &str = "DSMCOSIM_FMU_CRASH_CHILD";
 
@@ -24,17 +23,11 @@ fn a_crash_inside_an_fmu_kills_the_process_by_its_signal() {
         eprintln!("child: fmi2DoStep returned {result:?}");
         return;
     }
-    let exe = std::env::current_exe().expect("this test binary");
-    let out = Command::new(exe)
-        .args([
-            "--exact",
-            "crash::a_crash_inside_an_fmu_kills_the_process_by_its_signal",
-            "--nocapture",
-            "--test-threads=1",
-        ])
-        .env(CHILD, "1")
-        .output()
-        .expect("run the child");
+    let out = rerun_self(
+        "crash::a_crash_inside_an_fmu_kills_the_process_by_its_signal",
+        CHILD,
+        "1",
+    );
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(
         out.status.signal(),

@@ -41,3 +41,14 @@ pub fn real(inst: &Instance, vr: u32) -> f64 {
     inst.get_real(&[vr], &mut v).expect("get_real");
     v[0]
 }
+
+/// Runs this test binary again for the single test `test` with `var=value` set: for
+/// tests whose subject must happen in another process (a crash, stderr output).
+pub fn rerun_self(test: &str, var: &str, value: &str) -> std::process::Output {
+    let exe = std::env::current_exe().expect("this test binary");
+    std::process::Command::new(exe)
+        .args(["--exact", test, "--nocapture", "--test-threads=1"])
+        .env(var, value)
+        .output()
+        .expect("run the child")
+}

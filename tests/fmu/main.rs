@@ -12,5 +12,6 @@ mod crash;
 mod description;
 mod fmus;
 mod loading;
+mod logging;
 mod states;
 mod status;
