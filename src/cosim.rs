@@ -26,6 +26,7 @@
 //! error, max |w|) done in node order after the parallel part.
 
 pub mod event;
+pub mod fmus;
 pub mod tdma;
 pub mod world;
 

@@ -47,6 +47,11 @@ pub enum Error {
         /// What failed.
         message: String,
     },
+    /// An FMU failed: a call returned an error status, it could not be loaded at run
+    /// time, or it cannot do what the run asks (fork, checkpoint); the message names
+    /// the FMU, the function and the simulated time.
+    #[error("{0}")]
+    Fmu(String),
     /// `dsmcosim check`: the rerun differs from the stored run; the message names the
     /// first differing record.
     #[error("{0}")]
@@ -160,13 +165,14 @@ impl Error {
         }
     }
 
-    /// Process exit code: 2 for bad input, 3 for a diverged or numerically failed run,
+    /// Process exit code: 2 for bad input, 3 for a diverged or numerically failed run or a
+    /// failed FMU,
     /// 1 for I/O failures, 4 for a `check` that found a difference; for a `check` of
     /// several scenarios, the code their outcomes give.
     pub fn exit_code(&self) -> u8 {
         match self {
             Error::Parse { .. } | Error::Invalid { .. } => 2,
-            Error::Diverged(_) | Error::Numerical { .. } => 3,
+            Error::Diverged(_) | Error::Numerical { .. } | Error::Fmu(_) => 3,
             Error::Io { .. } => 1,
             Error::Mismatch(_) => 4,
             Error::Checks { code, .. } => *code,

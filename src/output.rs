@@ -146,6 +146,16 @@ where
     String::from_utf8(bytes).unwrap_or_default()
 }
 
+/// One CSV field as [`csv_text`] writes it (quoted only where needed), for a header
+/// written by hand.
+pub fn csv_field(text: &str) -> String {
+    let mut line = csv_text([[text]]);
+    if line.ends_with('\n') {
+        line.pop();
+    }
+    line
+}
+
 /// Creates `path` and its missing parents, like [`std::fs::create_dir_all`], with the
 /// path in the error.
 pub fn create_dir_all(path: &Path) -> Result<()> {

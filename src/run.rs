@@ -424,6 +424,7 @@ fn write_summary(out: &Path, run: &Ran) -> Result<()> {
         "status": match failure {
             None => "ok",
             Some(Error::Diverged(_) | Error::Numerical { .. }) => "diverged",
+            Some(Error::Fmu(_)) => "fmu_error",
             Some(Error::Interrupted { .. }) => "interrupted",
             Some(_) => "failed",
         },
@@ -441,7 +442,7 @@ fn write_summary(out: &Path, run: &Ran) -> Result<()> {
         "mean_cost": outcome.mean_cost,
         "bodies": scenario.bodies.len(),
         "links": scenario.links.len(),
-        "nodes": world.layout().nodes,
+        "nodes": scenario.node_count(),
         "messages": outcome.messages,
         "events": outcome.events,
         "channels": channels,
@@ -476,6 +477,26 @@ fn write_summary(out: &Path, run: &Ran) -> Result<()> {
             coupling["dissipated_j"] = json!(ports.dissipated);
         }
         summary["coupling"] = coupling;
+    }
+    if !scenario.fmus.is_empty() {
+        summary["fmus"] = scenario
+            .fmus
+            .iter()
+            .map(|f| {
+                json!({
+                    "name": f.name,
+                    "path": f.path.display().to_string(),
+                    "blake3": f.hash,
+                    "fmi_version": f.fmi_version,
+                    "model_identifier": f.model_identifier,
+                    "guid": f.guid,
+                    "generation_tool": f.generation_tool,
+                    "node": f.node + 1,
+                    "step": f.step.as_secs_f64(),
+                })
+            })
+            .collect();
+        summary["connections"] = json!(scenario.connections.len());
     }
     network::summarize(world, &mut summary);
     controlled::summarize(world, exp, &mut summary);

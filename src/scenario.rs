@@ -9,4 +9,4 @@ pub mod validate;
 
 pub use model::Scenario;
 pub use overrides::load_with;
-pub use validate::{load, parse_str};
+pub use validate::{load, parse_at, parse_str};

@@ -5,6 +5,7 @@ use std::sync::Arc;
 use nalgebra::{Quaternion, Vector3};
 use rayon::prelude::*;
 
+use super::fmus::FmuUnit;
 use super::{Event, TdmaLink};
 use crate::control::CostMeter;
 use crate::error::{Divergence, Error, Place, Result};
@@ -44,6 +45,10 @@ pub struct StepValues<'a> {
     pub max_w: f64,
     /// The bodies (masses and inertias, for [`StepValues::invariants`]).
     pub bodies: &'a [BodySpec],
+    /// The traced FMU outputs at this step, FMU by FMU in scenario order (each FMU's
+    /// value at its last communication point at or before this step); empty without
+    /// FMUs.
+    pub signals: &'a [f64],
 }
 
 impl StepValues<'_> {
@@ -124,11 +129,8 @@ pub fn network_of(
     scenario: &Scenario,
     layout: &Layout,
 ) -> std::result::Result<(Vec<Channel>, Option<TdmaLink>), TdmaError> {
-    let mut channels: Vec<Channel> = scenario
-        .channels
-        .iter()
-        .map(|c| Channel::new(c, &layout.routes))
-        .collect();
+    let channels = channels_of(scenario, layout);
+    let mut channels = channels;
     let tdma = match &scenario.network {
         NetworkSpec::Ideal => None,
         NetworkSpec::Tdma(_) => {
@@ -140,6 +142,28 @@ pub fn network_of(
         }
     };
     Ok((channels, tdma))
+}
+
+/// The channels of `scenario`, each with the routes of `layout` it matches and then the
+/// routes of the FMU connections that name it (kind `Signal`, `body` = the connection).
+pub fn channels_of(scenario: &Scenario, layout: &Layout) -> Vec<Channel> {
+    let mut channels: Vec<Channel> = scenario
+        .channels
+        .iter()
+        .map(|c| Channel::new(c, &layout.routes))
+        .collect();
+    for (i, c) in scenario.connections.iter().enumerate() {
+        channels[c.channel]
+            .routes
+            .push(crate::partition::layout::Route {
+                kind: DataKind::Signal,
+                from: scenario.fmus[c.from].node,
+                to: scenario.fmus[c.to].node,
+                body: i,
+                link: None,
+            });
+    }
+    channels
 }
 
 /// A watcher that watches nothing.
@@ -200,6 +224,10 @@ pub struct CoSim {
     messages: u64,
     events: u64,
     max_violation: f64,
+    /// The FMUs, in scenario order.
+    fmus: Vec<FmuUnit>,
+    /// The traced FMU outputs of the current step (see [`StepValues::signals`]).
+    signals: Vec<f64>,
     /// Links per lock-step (over every node's system) from which the nodes step in
     /// parallel on rayon ([`PARALLEL_MIN_LINKS`] unless set). Not part of the world's
     /// state: a checkpoint does not store it, and it changes no bit of a run.
@@ -293,7 +321,14 @@ impl CoSim {
             0
         };
         CoSim {
-            meter: CostMeter::new(nl, scenario.dt),
+            meter: CostMeter::new(
+                if scenario.cost_signals.is_empty() {
+                    nl
+                } else {
+                    scenario.cost_signals.len()
+                },
+                scenario.dt,
+            ),
             scenario: Arc::new(scenario.clone()),
             layout: Arc::new(layout),
             kernel,
@@ -315,6 +350,8 @@ impl CoSim {
             messages: 0,
             events: 0,
             max_violation: 0.0,
+            fmus: scenario.fmus.iter().map(FmuUnit::new).collect(),
+            signals: Vec::new(),
             parallel_min_links: PARALLEL_MIN_LINKS,
         }
     }
@@ -521,6 +558,13 @@ impl CoSim {
     /// the pending step when that is `PartitionStep` (no queued event has that class),
     /// else the queue's first.
     fn next_event(&mut self, class: EventClass, obs: &mut dyn Observer) -> Result<()> {
+        // A new world's (or a fork's, or a resumed run's) FMUs are made before its
+        // first event: channels may sample their outputs at time 0.
+        if self.fmus.iter().any(|u| !u.is_live()) {
+            for (unit, spec) in self.fmus.iter_mut().zip(&self.scenario.fmus) {
+                unit.start(spec)?;
+            }
+        }
         if class == EventClass::PartitionStep {
             if let Some(ts) = self.next_step.take() {
                 self.events += 1;
@@ -540,6 +584,11 @@ impl CoSim {
             Event::Deliver(msg) => {
                 self.messages += 1;
                 obs.on_delivery(t, &msg);
+                if let Payload::Signal { connection, value } = msg.payload {
+                    let c = &self.scenario.connections[connection];
+                    self.fmus[c.to].set_input(c.input, value);
+                    return Ok(());
+                }
                 // The nodes' state is that of the next step's time.
                 let state_time = SimTime(self.steps_done * self.scenario.dt.0);
                 self.nodes[msg.to].apply(msg.from, msg.sent, state_time, &msg.payload);
@@ -669,6 +718,19 @@ impl CoSim {
     /// A line's end starts its next wave window with its sample.
     fn message(&mut self, t: SimTime, c: usize, r: usize) -> Option<Message> {
         let route = self.channels[c].routes[r];
+        if route.kind == DataKind::Signal {
+            let conn = &self.scenario.connections[route.body];
+            return Some(Message {
+                from: route.from,
+                to: route.to,
+                channel: c,
+                sent: t,
+                payload: Payload::Signal {
+                    connection: route.body,
+                    value: self.fmus[conn.from].output(conn.output),
+                },
+            });
+        }
         let from = &mut self.nodes[route.from];
         let payload = match (route.kind, route.link) {
             (DataKind::State, _) => {
@@ -682,7 +744,7 @@ impl CoSim {
                 Payload::Line(from.line_sample(t, l)?)
             }
             (DataKind::Force, Some(l)) => from.force_payload(l, route.body),
-            (DataKind::Force, None) => return None,
+            (DataKind::Force, None) | (DataKind::Signal, _) => return None,
         };
         Some(Message {
             from: route.from,
@@ -795,7 +857,12 @@ impl CoSim {
             self.gather();
             self.check(t)?
         };
+        self.signals.clear();
+        for (unit, spec) in self.fmus.iter().zip(&self.scenario.fmus) {
+            unit.traced(spec, &mut self.signals);
+        }
         let values = StepValues {
+            signals: &self.signals,
             step: k,
             time: t,
             last,
@@ -814,7 +881,23 @@ impl CoSim {
         if last {
             return Ok(());
         }
-        self.meter.add(&self.w);
+        if self.scenario.cost_signals.is_empty() {
+            self.meter.add(&self.w);
+        } else {
+            // The window's cost is the RMS of the named FMU outputs at the steps' starts,
+            // as the links' cost takes their w.
+            let values: Vec<f64> = self
+                .scenario
+                .cost_signals
+                .iter()
+                .map(|&(f, k)| self.fmus[f].output(k))
+                .collect();
+            self.meter.add(&values);
+        }
+        let dt = self.scenario.dt;
+        for (unit, spec) in self.fmus.iter_mut().zip(&self.scenario.fmus) {
+            unit.step(spec, t, dt)?;
+        }
         if parallel {
             finish_parallel(&mut self.nodes, t).map_err(|(n, e)| self.eval_error(t, n, e))?;
         } else {

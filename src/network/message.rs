@@ -40,6 +40,13 @@ pub enum Payload {
     /// A transmission line's wave from the link owner's end (sent on the link's force
     /// route instead of a force).
     Line(LineSample),
+    /// An FMU output's value for the input it is connected to.
+    Signal {
+        /// Connection index (`Scenario::connections`).
+        connection: usize,
+        /// The output's value at the sample time.
+        value: f64,
+    },
     /// A border link's load on a ghosted body, for the body's owner.
     Force {
         /// Global link index.
@@ -67,6 +74,7 @@ impl Payload {
         match self {
             Payload::State { .. } => DataKind::State,
             Payload::Force { .. } | Payload::Line(_) => DataKind::Force,
+            Payload::Signal { .. } => DataKind::Signal,
         }
     }
 
@@ -75,7 +83,7 @@ impl Payload {
     pub fn floats(&self, rigid: bool, coupling: Coupling) -> usize {
         let lines = match self {
             Payload::State { lines, .. } => lines.len(),
-            Payload::Force { .. } => 0,
+            Payload::Force { .. } | Payload::Signal { .. } => 0,
             Payload::Line(_) => 1,
         };
         crate::network::tdma::frame::floats_per_route(self.kind(), rigid, coupling, lines)

@@ -176,7 +176,7 @@ impl LineSet {
     pub fn on_route(&self, scenario: &Scenario, node_of: &[usize], r: &Route) -> usize {
         match (r.kind, r.link) {
             (DataKind::Force, Some(l)) => usize::from(self.is_line(l)),
-            (DataKind::Force, None) => 0,
+            (DataKind::Force, None) | (DataKind::Signal, _) => 0,
             (DataKind::State, _) => scenario
                 .links
                 .iter()

@@ -460,6 +460,8 @@ impl Node {
                 held.omega = self.state.omega.get(g).copied();
             }
             Payload::Line(sample) => self.receive_line(sent, state_time, sample),
+            // The world hands FMU signals to the FMUs; no partition receives one.
+            Payload::Signal { .. } => {}
             Payload::Force {
                 link,
                 force,

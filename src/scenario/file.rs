@@ -102,7 +102,9 @@ pub struct ScenarioFile {
     /// Body model; default `"auto"` (point masses when nothing can rotate).
     #[serde(default)]
     pub body_model: BodyModelFile,
-    /// The bodies and links: a generated grid or an explicit list; required.
+    /// The bodies and links: a generated grid or an explicit list; required, except in
+    /// a scene of `fmus` only.
+    #[serde(default)]
     pub model: ModelFile,
     /// External forces; default none.
     #[serde(default)]
@@ -144,6 +146,72 @@ pub struct ScenarioFile {
         skip_serializing_if = "Option::is_none"
     )]
     pub controller: Option<ControllerFile>,
+    /// FMI 2.0 co-simulation FMUs run as parts of the scene, each on a node; default none.
+    #[serde(default)]
+    pub fmus: Vec<FmuFile>,
+    /// Connections from an FMU's output to an FMU's input, each carried by a channel;
+    /// default none.
+    #[serde(default)]
+    pub connections: Vec<ConnectionFile>,
+    /// The directory relative FMU paths are read from: the scenario file's directory
+    /// when it was loaded from a file, else the working directory. Not part of the file.
+    #[serde(skip)]
+    #[schemars(skip)]
+    pub base_dir: Option<std::path::PathBuf>,
+}
+
+/// `fmus[i]`: an FMI 2.0 co-simulation FMU (docs/fmu.md).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct FmuFile {
+    /// Name, unique, of letters, digits and `_`: connections say `<name>.<variable>`
+    /// and trace.csv's columns `<name>.<variable>`; required.
+    pub name: String,
+    /// The `.fmu` file, relative to the scenario file's directory; required.
+    pub path: String,
+    /// Node the FMU runs on (1-based); default 1. Nodes beyond the partition's (or
+    /// beyond node 1 without a partition) hold FMUs only.
+    #[serde(default = "default_fmu_node")]
+    pub node: usize,
+    /// Communication step [s]: a whole number of nanoseconds that divides `dt` or is a
+    /// whole multiple of it, and divides the duration; default `dt`.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub step: Option<f64>,
+    /// Start values of parameters and inputs, by variable name (Real, Integer or
+    /// Boolean variables; a Boolean is 0 or 1); default none (the FMU's own starts).
+    #[serde(default)]
+    pub start: std::collections::BTreeMap<String, f64>,
+    /// Outputs recorded in trace.csv (and the digest); default every Real output.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub trace: Option<Vec<String>>,
+    /// Print the FMU's log messages on stderr; default `false`.
+    #[serde(default)]
+    pub logging: bool,
+}
+
+fn default_fmu_node() -> usize {
+    1
+}
+
+/// `connections[i]`: an FMU output carried to an FMU input by a channel.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ConnectionFile {
+    /// Source, `<fmu>.<variable>`: a Real output; required.
+    pub from: String,
+    /// Target, `<fmu>.<variable>`: a Real input fed by no other connection; required.
+    pub to: String,
+    /// Name of the channel that samples the source every τ and delivers each sample
+    /// after its latency; required.
+    pub channel: String,
 }
 
 /// `integrator`: the time integrator of the `(x, v, z)` state.
@@ -542,6 +610,14 @@ pub struct MeasurementFile {
         skip_serializing_if = "Option::is_none"
     )]
     pub period: Option<f64>,
+    /// FMU outputs whose RMS over a window, summed, is the window's cost instead of the
+    /// links' `Σ RMS w` (`<fmu>.<variable>`, Real outputs); default none (the links).
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub signals: Option<Vec<String>>,
 }
 
 fn default_decimation() -> u64 {
@@ -950,6 +1026,8 @@ pub enum DataKindFile {
     /// `"force"`: border-link constraint forces, from the link's owner to the owner of
     /// the ghosted body.
     Force,
+    /// `"signal"`: FMU connections' values (only those naming the channel).
+    Signal,
 }
 
 /// Default units per transfer k [1] (see [`ChannelFile::k`]).

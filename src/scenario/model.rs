@@ -490,6 +490,8 @@ pub enum DataKind {
     State,
     /// A border link's constraint force on a ghosted body, link owner → body owner.
     Force,
+    /// An FMU output's value, for the FMU input it is connected to.
+    Signal,
 }
 
 impl DataKind {
@@ -498,6 +500,7 @@ impl DataKind {
         match self {
             DataKind::State => "state",
             DataKind::Force => "force",
+            DataKind::Signal => "signal",
         }
     }
 }
@@ -710,4 +713,115 @@ pub struct Scenario {
     pub channels: Vec<ChannelSpec>,
     /// Delay controller; `None` = channels keep their scenario periods.
     pub controller: Option<ControllerSpec>,
+    /// FMUs run as parts of the scene (docs/fmu.md).
+    pub fmus: Vec<FmuSpec>,
+    /// FMU output → FMU input connections, each on a channel.
+    pub connections: Vec<ConnectionSpec>,
+    /// `measurement.signals`: the FMU outputs (FMU, index into its `outputs`) whose
+    /// summed RMS is a window's cost; empty = the links' `Σ RMS w`.
+    pub cost_signals: Vec<(usize, usize)>,
+}
+
+impl Scenario {
+    /// Computing nodes: the partition's (1 without one), or more where an FMU runs on
+    /// a node of its own.
+    pub fn node_count(&self) -> usize {
+        let model = self.partition.as_ref().map_or(1, |p| p.nodes);
+        self.fmus.iter().map(|f| f.node + 1).fold(model, usize::max)
+    }
+}
+
+/// The highest node number an FMU may run on (1-based): each node is a place in the
+/// network's tables and, on TDMA, a sender in the slot list.
+pub const MAX_FMU_NODE: usize = 1024;
+
+/// A validated FMU of `fmus[]`.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct FmuSpec {
+    /// Name (unique in the scenario).
+    pub name: String,
+    /// The `.fmu` file as resolved (relative to the scenario file's directory).
+    pub path: std::path::PathBuf,
+    /// BLAKE3 of the `.fmu` file (hex): a run refuses a file that changed since
+    /// validation, and summary.json records it.
+    pub hash: String,
+    /// Node (0-based).
+    pub node: usize,
+    /// Communication step: divides `dt` or is a whole multiple of it.
+    pub step: SimTime,
+    /// FMI version of the model description (`"2.0"`).
+    pub fmi_version: String,
+    /// The co-simulation model identifier (the binary's name).
+    pub model_identifier: String,
+    /// The description's `guid`.
+    pub guid: String,
+    /// The tool that generated the FMU, if the description says.
+    pub generation_tool: Option<String>,
+    /// `canGetAndSetFMUstate`: forks and lookahead measurement need it.
+    pub can_get_set_state: bool,
+    /// `canSerializeFMUstate`: forks and checkpoints need it.
+    pub can_serialize_state: bool,
+    /// `canBeInstantiatedOnlyOncePerProcess`: no fork can run beside the live run.
+    pub only_once_per_process: bool,
+    /// Start values set before initialization.
+    pub start: Vec<FmuStart>,
+    /// Outputs read after every communication step: the traced ones and the connected
+    /// ones, in description order.
+    pub outputs: Vec<FmuVar>,
+    /// Inputs fed by connections, in description order.
+    pub inputs: Vec<FmuVar>,
+    /// Print the FMU's log messages.
+    pub logging: bool,
+}
+
+/// A variable an FMU reads or writes through the co-simulation.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct FmuVar {
+    /// Variable name.
+    pub name: String,
+    /// Value reference.
+    pub vr: u32,
+    /// Output recorded in trace.csv (outputs only).
+    pub traced: bool,
+    /// Value before the first delivery (inputs: the start value; outputs: unused).
+    pub start: f64,
+}
+
+/// A start value of `fmus[i].start`.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct FmuStart {
+    /// Variable name.
+    pub name: String,
+    /// Value reference.
+    pub vr: u32,
+    /// Type at the FMI interface.
+    pub kind: FmuValueKind,
+    /// Value (an Integer's or Boolean's as a whole number).
+    pub value: f64,
+}
+
+/// The FMI types a start value can have.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum FmuValueKind {
+    /// `fmi2Real`.
+    Real,
+    /// `fmi2Integer`.
+    Integer,
+    /// `fmi2Boolean`.
+    Boolean,
+}
+
+/// A validated connection: output `output` of FMU `from` to input `input` of FMU `to`.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ConnectionSpec {
+    /// Source FMU (index into `fmus`).
+    pub from: usize,
+    /// Index into the source's `outputs`.
+    pub output: usize,
+    /// Target FMU.
+    pub to: usize,
+    /// Index into the target's `inputs`.
+    pub input: usize,
+    /// Channel carrying it.
+    pub channel: usize,
 }

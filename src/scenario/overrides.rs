@@ -27,9 +27,12 @@ pub fn load_with(path: &Path, sets: &[String]) -> Result<(Scenario, String)> {
     if sets.is_empty() {
         // Read once: a second read of a pipe would find nothing.
         let bytes = crate::input::read(path)?;
-        let scenario = super::validate::from_bytes(&bytes, &path.display().to_string())?;
-        // UTF-8: `from_bytes` has checked it.
-        let text = String::from_utf8_lossy(&bytes).into_owned();
+        let Ok(text) = String::from_utf8(bytes) else {
+            // Not UTF-8: the plain loader says where.
+            return super::load(path).map(|s| (s, String::new()));
+        };
+        let label = path.display().to_string();
+        let scenario = super::validate::parse_at(&text, &label, Some(path))?;
         return Ok((scenario, text));
     }
     if sets.len() > MAX_OVERRIDES {
@@ -54,7 +57,8 @@ pub fn load_with(path: &Path, sets: &[String]) -> Result<(Scenario, String)> {
         serde_json::to_string_pretty(&doc).map_err(|e| Error::invalid("--set", e.to_string()))?;
     text.push('\n');
     let label = format!("{} with --set", path.display());
-    let scenario = super::parse_str(&text, &label).map_err(|e| locate(e, sets))?;
+    let scenario =
+        super::validate::parse_at(&text, &label, Some(path)).map_err(|e| locate(e, sets))?;
     Ok((scenario, text))
 }
 

@@ -22,6 +22,7 @@ mod bodies;
 mod channels;
 pub(super) mod checks;
 mod controller;
+mod fmus;
 mod joints;
 mod network;
 mod partition;
@@ -61,14 +62,33 @@ use crate::kernel::SimTime;
 /// [`Error::Parse`] at the first bad byte; everything else is as [`parse_str`].
 pub fn load(path: &Path) -> Result<Scenario> {
     let bytes = crate::input::read(path)?;
-    from_bytes(&bytes, &path.display().to_string())
+    let text = utf8(&bytes, &path.display().to_string())?;
+    parse_at(text, &path.display().to_string(), Some(path))
+}
+
+/// Parses and validates the text of the scenario file at `path` (`None`: not from a
+/// file): relative FMU paths are read from the file's directory.
+pub fn parse_at(text: &str, label: &str, path: Option<&Path>) -> Result<Scenario> {
+    let mut file = parse_file(text, label)?;
+    file.base_dir = path.map(|p| {
+        p.parent()
+            .filter(|d| !d.as_os_str().is_empty())
+            .unwrap_or(Path::new("."))
+            .to_path_buf()
+    });
+    validate(file)
 }
 
 /// Parses and validates the bytes of a scenario file; `label` names it in errors. Bytes
 /// that are not UTF-8 are an [`Error::Parse`] at the first bad byte.
 pub fn from_bytes(bytes: &[u8], label: &str) -> Result<Scenario> {
+    parse_str(utf8(bytes, label)?, label)
+}
+
+/// The bytes of a scenario file as text, or an [`Error::Parse`] at the first bad byte.
+fn utf8<'a>(bytes: &'a [u8], label: &str) -> Result<&'a str> {
     let label = label.to_string();
-    let text = std::str::from_utf8(bytes).map_err(|e| {
+    std::str::from_utf8(bytes).map_err(|e| {
         let before = &bytes[..e.valid_up_to()];
         let line = 1 + before.iter().filter(|&&b| b == b'\n').count();
         let column = 1 + before.iter().rev().take_while(|&&b| b != b'\n').count();
@@ -78,8 +98,7 @@ pub fn from_bytes(bytes: &[u8], label: &str) -> Result<Scenario> {
             line,
             column,
         }
-    })?;
-    parse_str(text, &label)
+    })
 }
 
 /// Parses and validates scenario JSON; `file_label` names the source in parse errors.
@@ -266,7 +285,12 @@ pub fn validate(file: ScenarioFile) -> Result<Scenario> {
         mut links,
         mut body_model,
         ids,
-    } = model(&file.model, file.body_model, loads_needing_rotation(&file))?;
+    } = model(
+        &file.model,
+        file.body_model,
+        loads_needing_rotation(&file),
+        !file.fmus.is_empty(),
+    )?;
     if !file.model.joints.is_empty() {
         if file.body_model == BodyModelFile::PointMass {
             return Err(Error::invalid(
@@ -304,8 +328,32 @@ pub fn validate(file: ScenarioFile) -> Result<Scenario> {
         )?),
         None => None,
     };
-    let channels = channels(&file.channels, partition.as_ref(), &links, dt)?;
-    let network = network(&file.network, partition.as_ref(), &channels)?;
+    let signal_channels: Vec<&str> = file
+        .connections
+        .iter()
+        .map(|c| c.channel.as_str())
+        .collect();
+    let channels = channels(
+        &file.channels,
+        partition.as_ref(),
+        &links,
+        dt,
+        &signal_channels,
+    )?;
+    let fmus::Fmus {
+        specs: fmus,
+        connections,
+        cost_signals,
+    } = fmus::fmus(
+        &file.fmus,
+        &file.connections,
+        file.measurement.signals.as_deref(),
+        file.base_dir.as_deref(),
+        (dt, duration),
+        &channels,
+    )?;
+    let fmu_nodes = fmus.iter().map(|f| f.node + 1).max().unwrap_or(0);
+    let network = network(&file.network, partition.as_ref(), fmu_nodes, &channels)?;
     if matches!(network, NetworkSpec::Tdma(_)) {
         if let Some(i) = file.channels.iter().position(|c| c.phase.is_some()) {
             return Err(Error::invalid(
@@ -346,6 +394,9 @@ pub fn validate(file: ScenarioFile) -> Result<Scenario> {
         network,
         channels,
         controller,
+        fmus,
+        connections,
+        cost_signals,
     };
     check_tdma(&scenario)?;
     Ok(scenario)
@@ -661,6 +712,7 @@ fn output(o: &OutputFile, ids: &Ids, body_count: usize) -> Result<OutputSpec> {
     };
     let plot_bodies = match &o.plot_bodies {
         Some(ids) => list("plot_bodies", ids)?,
+        None if body_count == 0 => Vec::new(),
         None if body_count == 1 => vec![0],
         None => vec![0, body_count - 1],
     };

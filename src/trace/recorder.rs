@@ -75,6 +75,10 @@ pub struct Recorder {
     invariants: InvariantLog,
     /// The SMC boundary layer's account (SMC runs built with [`Recorder::for_scenario`]).
     layer: Option<LayerWatch>,
+    /// trace.csv's names of the FMU outputs recorded per step (`<fmu>.<variable>`,
+    /// quoted where CSV needs it), after everything else; empty without FMUs.
+    #[serde(default)]
+    signal_names: Vec<String>,
 }
 
 impl Recorder {
@@ -128,6 +132,16 @@ impl Recorder {
         }
         r.invariants = InvariantLog::new(&undriven_stretches(scenario));
         r.layer = LayerWatch::new(scenario);
+        r.signal_names = scenario
+            .fmus
+            .iter()
+            .flat_map(|f| {
+                f.outputs
+                    .iter()
+                    .filter(|v| v.traced)
+                    .map(move |v| crate::output::csv_field(&format!("{}.{}", f.name, v.name)))
+            })
+            .collect();
         if let Some(f) = file {
             r.start_file(f, &ids)?;
         }
@@ -172,6 +186,7 @@ impl Recorder {
             rotation: false,
             invariants: InvariantLog::new(&[]),
             layer: None,
+            signal_names: Vec::new(),
         }
     }
 
@@ -210,6 +225,10 @@ impl Recorder {
                 }
             }
         }
+        for name in &self.signal_names {
+            head.push(',');
+            head.push_str(name);
+        }
         self.line = format!("{head}\n");
         file.write_all(self.line.as_bytes())?;
         self.text_hash.update(self.line.as_bytes());
@@ -229,6 +248,7 @@ impl Recorder {
         for v in s.v {
             d.values(v.as_slice());
         }
+        d.values(s.signals);
         d.end_step();
         for (peak, w) in self.link_peaks.iter_mut().zip(s.w) {
             *peak = peak.max(w.abs());
@@ -313,6 +333,9 @@ impl Recorder {
                     let _ = write!(self.line, ",{x}");
                 }
             }
+        }
+        for x in s.signals {
+            let _ = write!(self.line, ",{x}");
         }
         self.line.push('\n');
         if let Some(kept) = &mut self.kept {
@@ -567,6 +590,7 @@ mod tests {
                 w[20] = 0.9; // larger still, on a row the plot skips (decimation 2)
             }
             r.record(&StepValues {
+                signals: &[],
                 step,
                 time: SimTime(step * 1_000_000),
                 last: step == 3,

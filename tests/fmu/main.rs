@@ -3,11 +3,12 @@
 //! directory.
 
 #[path = "../support/fmu_build.rs"]
-mod fmu_build;
+pub mod fmu_build;
 
 mod archive;
 mod capability;
 mod closed_form;
+mod cosim;
 mod crash;
 mod description;
 mod fmus;

@@ -998,6 +998,7 @@ fn scenario() -> impl Strategy<Value = ScenarioFile> {
                 divergence: DivergenceFile { max_violation },
                 measurement: MeasurementFile {
                     period: explicit_period.then(|| secs(dt_ns * period_steps.min(steps))),
+                    signals: None,
                 },
                 output: OutputFile {
                     decimation,
@@ -1009,6 +1010,9 @@ fn scenario() -> impl Strategy<Value = ScenarioFile> {
                 controller: None,
                 network: NetworkFile::default(),
                 channels,
+                fmus: Vec::new(),
+                connections: Vec::new(),
+                base_dir: None,
             }
         },
     )

@@ -84,12 +84,17 @@ pub fn floats_per_route(kind: DataKind, rigid: bool, coupling: Coupling, lines: 
     if kind == DataKind::Force && lines > 0 {
         return 8;
     }
+    // An FMU connection carries its one value.
+    if kind == DataKind::Signal {
+        return 1;
+    }
     let loads = if rigid { 6 } else { 3 };
     let base = match (kind, rigid) {
         (DataKind::State, false) => 9,
         (DataKind::State, true) => 19,
         (DataKind::Force, false) => 3,
         (DataKind::Force, true) => 6,
+        (DataKind::Signal, _) => 1,
     };
     let rates = if coupling.predicts() { loads } else { 0 };
     let energy = usize::from(coupling.tank().is_some());

@@ -32,6 +32,7 @@ pub(super) fn model(
     model: &ModelFile,
     choice: BodyModelFile,
     loads: Option<(String, Vec<f64>)>,
+    fmus_only: bool,
 ) -> Result<Model> {
     // Expand a grid into the explicit form, so both kinds of model validate alike.
     let (body_files, link_files) = match (&model.grid, &model.bodies, &model.links) {
@@ -49,11 +50,17 @@ pub(super) fn model(
                 "needs `bodies` (a grid generates its own links)",
             ))
         }
+        // A scene of FMUs only: no bodies, no links.
+        (None, None, None) if fmus_only => (Vec::new(), Vec::new()),
         (None, None, None) => {
-            return Err(Error::invalid("model", "needs either `grid` or `bodies`"))
+            return Err(Error::invalid(
+                "model",
+                "needs either `grid` or `bodies` (or leave `model` out in a scene of \
+                 `fmus` only)",
+            ))
         }
     };
-    if body_files.is_empty() {
+    if body_files.is_empty() && !fmus_only {
         return Err(Error::invalid(
             "model.bodies",
             "must list at least one body",

@@ -36,25 +36,29 @@ pub(super) fn channels(
     partition: Option<&PartitionSpec>,
     links: &[LinkSpec],
     dt: SimTime,
+    signals: &[&str],
 ) -> Result<Vec<ChannelSpec>> {
-    let Some(p) = partition else {
-        if list.is_empty() {
-            return Ok(Vec::new());
-        }
+    if partition.is_none() && !list.is_empty() && signals.is_empty() {
         return Err(Error::invalid(
             "channels",
             format!(
-                "needs a `partition` section (got {} channel(s) on a monolithic model)",
+                "needs a `partition` section or `connections` (got {} channel(s) on a \
+                 monolithic model)",
                 list.len()
             ),
         ));
+    }
+    let (nodes, borders) = match partition {
+        Some(p) => (p.nodes, borders(p, links)),
+        None => (1, BTreeSet::new()),
     };
-    let borders = borders(p, links);
     if list.is_empty() && !borders.is_empty() {
-        let border_links = links
-            .iter()
-            .filter(|l| p.node_of[l.a] != p.node_of[l.b])
-            .count();
+        let border_links = partition.map_or(0, |p| {
+            links
+                .iter()
+                .filter(|l| p.node_of[l.a] != p.node_of[l.b])
+                .count()
+        });
         return Err(Error::invalid(
             "channels",
             format!(
@@ -74,9 +78,9 @@ pub(super) fn channels(
                 format!("duplicate name {:?} (also channels[{first}].name)", c.name),
             ));
         }
-        specs.push(channel(&path, c, p.nodes, &borders, dt)?);
+        specs.push(channel(&path, c, nodes, &borders, dt)?);
     }
-    routes(&specs, &borders)?;
+    routes(&specs, &borders, signals)?;
     Ok(specs)
 }
 
@@ -229,6 +233,7 @@ fn kinds(path: &str, list: &[DataKindFile]) -> Result<Vec<DataKind>> {
         let kind = match k {
             DataKindFile::State => DataKind::State,
             DataKindFile::Force => DataKind::Force,
+            DataKindFile::Signal => DataKind::Signal,
         };
         if out.contains(&kind) {
             return Err(Error::invalid(
@@ -242,9 +247,16 @@ fn kinds(path: &str, list: &[DataKindFile]) -> Result<Vec<DataKind>> {
 }
 
 /// Every route on exactly one channel, and every channel on at least one route.
-fn routes(channels: &[ChannelSpec], borders: &BTreeSet<(usize, usize)>) -> Result<()> {
+fn routes(
+    channels: &[ChannelSpec],
+    borders: &BTreeSet<(usize, usize)>,
+    signals: &[&str],
+) -> Result<()> {
     let named = |i: usize| format!("channels[{i}] {:?}", channels[i].name);
-    let mut used = vec![false; channels.len()];
+    let mut used: Vec<bool> = channels
+        .iter()
+        .map(|c| signals.contains(&c.name.as_str()))
+        .collect();
     for &(a, b) in borders {
         for kind in [DataKind::State, DataKind::Force] {
             let on: Vec<usize> = (0..channels.len())
@@ -281,7 +293,7 @@ fn routes(channels: &[ChannelSpec], borders: &BTreeSet<(usize, usize)>) -> Resul
         return Err(Error::invalid(
             format!("channels[{i}]"),
             format!(
-                "channel {:?} carries no message (the partition has no border links)",
+                "channel {:?} carries no message (no border link or connection uses it)",
                 channels[i].name
             ),
         ));

@@ -17,6 +17,7 @@ use crate::scenario::model::{
 pub(super) fn network(
     n: &NetworkFile,
     partition: Option<&PartitionSpec>,
+    fmu_nodes: usize,
     channels: &[ChannelSpec],
 ) -> Result<NetworkSpec> {
     match n.kind {
@@ -24,7 +25,9 @@ pub(super) fn network(
             ideal_has_no_tdma_keys(n)?;
             Ok(NetworkSpec::Ideal)
         }
-        NetworkKind::Tdma => tdma(n, partition, channels).map(|t| NetworkSpec::Tdma(Box::new(t))),
+        NetworkKind::Tdma => {
+            tdma(n, partition, fmu_nodes, channels).map(|t| NetworkSpec::Tdma(Box::new(t)))
+        }
     }
 }
 
@@ -50,17 +53,22 @@ fn ideal_has_no_tdma_keys(n: &NetworkFile) -> Result<()> {
     }
 }
 
+/// A `tdma` network over the partition's nodes, or as many as the FMUs run on
+/// (`fmu_nodes`, the highest FMU node number), whichever is more.
 fn tdma(
     n: &NetworkFile,
     partition: Option<&PartitionSpec>,
+    fmu_nodes: usize,
     channels: &[ChannelSpec],
 ) -> Result<TdmaSpec> {
-    let Some(p) = partition else {
+    let nodes = partition.map_or(0, |p| p.nodes).max(fmu_nodes);
+    if partition.is_none() && fmu_nodes < 2 {
         return Err(Error::invalid(
             "network.kind",
-            "\"tdma\" needs a `partition` section (a monolithic model sends no messages)",
+            "\"tdma\" needs a `partition` section or FMUs on two nodes or more (a \
+             monolithic model sends no messages)",
         ));
-    };
+    }
     for (i, c) in channels.iter().enumerate() {
         if c.latency.is_some() {
             return Err(Error::invalid(
@@ -76,7 +84,7 @@ fn tdma(
     };
     let slot = secs("slot", n.slot)?.ok_or_else(|| required("network.slot", "tdma"))?;
     let cycle = secs("cycle", n.cycle)?.ok_or_else(|| required("network.cycle", "tdma"))?;
-    let mut cfg = TdmaConfig::new(p.nodes, slot, cycle);
+    let mut cfg = TdmaConfig::new(nodes, slot, cycle);
     if let Some(g) = secs("guard", n.guard)? {
         cfg.guard = g;
     }
@@ -103,7 +111,7 @@ fn tdma(
     let slot_list = n
         .slot_list
         .as_ref()
-        .map(|l| slot_list(l, p.nodes, channels))
+        .map(|l| slot_list(l, nodes, channels))
         .transpose()?;
     let decision_lag = secs("decision_lag", n.decision_lag)?.unwrap_or(SimTime::ZERO);
     Ok(TdmaSpec {
@@ -242,11 +250,7 @@ pub(super) fn check_tdma(s: &Scenario) -> Result<()> {
         return Ok(());
     };
     let layout = crate::partition::Layout::new(s);
-    let channels: Vec<_> = s
-        .channels
-        .iter()
-        .map(|c| crate::network::Channel::new(c, &layout.routes))
-        .collect();
+    let channels = crate::cosim::world::channels_of(s, &layout);
     let link = TdmaLink::new(s, &channels).map_err(|e| {
         // A frame that is too long under a predicting coupling may fit under `reset`,
         // whose messages carry no force rates and no energy reports: say so.

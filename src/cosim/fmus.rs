@@ -1,0 +1,267 @@
+//! FMUs as nodes of the co-simulation: each steps in lock-step with the kernel, its
+//! connected outputs sampled by channels and its inputs set by deliveries.
+//!
+//! The call sequence per FMU, as libcosim's slave documents its own: instantiate,
+//! `fmi2SetupExperiment(0)`, the start values, enter and exit initialization (the
+//! outputs at 0 are read there), then per communication step: the held inputs set,
+//! `fmi2DoStep(t, h)`, the outputs read. Outputs of a step that ends at `t + h` become
+//! visible to channels and the trace only when the lock-step reaches `t + h`, so no
+//! one ever sees an FMU's future; an input delivered between two communication points
+//! is held until the next (zero-order hold, the co-simulation's convention).
+//!
+//! A fork (`Clone`) or a checkpoint carries the FMU's state as bytes
+//! (`fmi2SerializeFMUstate`); the fork instantiates its own instance on its first event
+//! and restores them. An FMU without `canGetAndSetFMUstate` and `canSerializeFMUstate`
+//! cannot be forked: the fork's first event fails naming the FMU and the capability,
+//! so lookahead measurement and checkpoints are refused while online measurement works.
+
+use std::sync::{Arc, Mutex};
+
+use crate::error::{Error, Result};
+use crate::fmu::{Fmu, Instance};
+use crate::kernel::SimTime;
+use crate::scenario::model::{FmuSpec, FmuValueKind};
+
+/// One FMU's place in the world: its live instance (not in a fork until its first
+/// event) and what the co-simulation holds of it.
+pub struct FmuUnit {
+    /// The FMU's communication time: it has stepped up to here.
+    time: SimTime,
+    /// The outputs channels and the trace see (those at the last communication point
+    /// the lock-step has reached), in `FmuSpec::outputs` order.
+    published: Vec<f64>,
+    /// The outputs at `time`, published when the lock-step reaches it.
+    pending: Vec<f64>,
+    /// The inputs as last delivered (their start values before), in `FmuSpec::inputs`
+    /// order.
+    inputs: Vec<f64>,
+    /// A state to restore when the instance is made (a fork's or a resumed run's).
+    saved: Option<Arc<Vec<u8>>>,
+    /// Why this fork cannot run (its source could not hand over its state).
+    broken: Option<String>,
+    /// The loaded FMU, shared by a run and its forks.
+    fmu: Option<Arc<Fmu>>,
+    /// The instance; a mutex so that a fork (`&self`) can ask it for its state.
+    live: Option<Mutex<Instance>>,
+}
+
+impl std::fmt::Debug for FmuUnit {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("FmuUnit")
+            .field("time", &self.time)
+            .field("published", &self.published)
+            .field("inputs", &self.inputs)
+            .field("live", &self.live.is_some())
+            .finish()
+    }
+}
+
+impl FmuUnit {
+    /// The unit of `spec`, not instantiated yet.
+    pub fn new(spec: &FmuSpec) -> FmuUnit {
+        let starts: Vec<f64> = spec.outputs.iter().map(|v| v.start).collect();
+        FmuUnit {
+            time: SimTime::ZERO,
+            published: starts.clone(),
+            pending: starts,
+            inputs: spec.inputs.iter().map(|v| v.start).collect(),
+            saved: None,
+            broken: None,
+            fmu: None,
+            live: None,
+        }
+    }
+
+    /// Whether the instance exists.
+    pub fn is_live(&self) -> bool {
+        self.live.is_some()
+    }
+
+    /// Output `k` as channels and the trace see it.
+    pub fn output(&self, k: usize) -> f64 {
+        self.published[k]
+    }
+
+    /// The traced outputs, appended to `out`.
+    pub fn traced(&self, spec: &FmuSpec, out: &mut Vec<f64>) {
+        for (v, &x) in spec.outputs.iter().zip(&self.published) {
+            if v.traced {
+                out.push(x);
+            }
+        }
+    }
+
+    /// A delivery: input `k` holds `value` from the next communication point on.
+    pub fn set_input(&mut self, k: usize, value: f64) {
+        self.inputs[k] = value;
+    }
+
+    /// Makes the instance: a fresh one initialized from the start values, or one
+    /// restored to the state this unit carries.
+    pub fn start(&mut self, spec: &FmuSpec) -> Result<()> {
+        if self.live.is_some() {
+            return Ok(());
+        }
+        if let Some(why) = &self.broken {
+            return Err(Error::Fmu(why.clone()));
+        }
+        let fmu = match &self.fmu {
+            Some(f) => f.clone(),
+            None => {
+                let f = Fmu::load(&spec.name, &spec.path).map_err(fmu_error)?;
+                if f.hash() != spec.hash {
+                    return Err(Error::Fmu(format!(
+                        "FMU '{}': {} changed since the scenario was validated (BLAKE3 {} \
+                         instead of {})",
+                        spec.name,
+                        spec.path.display(),
+                        f.hash(),
+                        spec.hash
+                    )));
+                }
+                Arc::new(f)
+            }
+        };
+        let mut inst = fmu
+            .instantiate(&spec.name, spec.logging)
+            .map_err(fmu_error)?;
+        inst.setup_experiment(0.0, None).map_err(fmu_error)?;
+        for s in &spec.start {
+            match s.kind {
+                FmuValueKind::Real => inst.set_real(&[s.vr], &[s.value]),
+                FmuValueKind::Integer => inst.set_integer(&[s.vr], &[s.value as i32]),
+                FmuValueKind::Boolean => inst.set_boolean(&[s.vr], &[s.value != 0.0]),
+            }
+            .map_err(fmu_error)?;
+        }
+        inst.enter_initialization_mode().map_err(fmu_error)?;
+        inst.exit_initialization_mode().map_err(fmu_error)?;
+        match self.saved.take() {
+            Some(bytes) => {
+                let state = inst.deserialize_state(&bytes).map_err(fmu_error)?;
+                inst.set_state(&state).map_err(fmu_error)?;
+            }
+            None => {
+                let vrs: Vec<u32> = spec.outputs.iter().map(|v| v.vr).collect();
+                inst.get_real(&vrs, &mut self.pending).map_err(fmu_error)?;
+                self.published.copy_from_slice(&self.pending);
+            }
+        }
+        self.fmu = Some(fmu);
+        self.live = Some(Mutex::new(inst));
+        Ok(())
+    }
+
+    /// The lock-step at `t` (of length `dt`): the communication steps that start in
+    /// `[t, t + dt)`, then the outputs of the point the next lock-step reaches
+    /// published.
+    pub fn step(&mut self, spec: &FmuSpec, t: SimTime, dt: SimTime) -> Result<()> {
+        let h = spec.step;
+        let end = SimTime(t.0.saturating_add(dt.0));
+        if self.time >= t && self.time < end {
+            let inst = self
+                .live
+                .as_mut()
+                .expect("ok: the world starts every FMU before its first event")
+                .get_mut()
+                .unwrap_or_else(|poisoned| poisoned.into_inner());
+            let in_vrs: Vec<u32> = spec.inputs.iter().map(|v| v.vr).collect();
+            while self.time < end {
+                if !in_vrs.is_empty() {
+                    inst.set_real(&in_vrs, &self.inputs).map_err(fmu_error)?;
+                }
+                inst.do_step(self.time.as_secs_f64(), h.as_secs_f64())
+                    .map_err(fmu_error)?;
+                self.time = SimTime(self.time.0.saturating_add(h.0));
+            }
+            let vrs: Vec<u32> = spec.outputs.iter().map(|v| v.vr).collect();
+            inst.get_real(&vrs, &mut self.pending).map_err(fmu_error)?;
+        }
+        if self.time == end {
+            self.published.copy_from_slice(&self.pending);
+        }
+        Ok(())
+    }
+
+    /// The instance's state as bytes, for a fork or a checkpoint.
+    fn capture(&self) -> std::result::Result<Option<Arc<Vec<u8>>>, String> {
+        let Some(live) = &self.live else {
+            return Ok(self.saved.clone());
+        };
+        if let Some(why) = &self.broken {
+            return Err(why.clone());
+        }
+        let inst = live.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        let state = inst.get_state().map_err(|e| e.to_string())?;
+        let bytes = inst.serialize_state(&state).map_err(|e| e.to_string())?;
+        Ok(Some(Arc::new(bytes)))
+    }
+}
+
+fn fmu_error(e: crate::fmu::FmuError) -> Error {
+    Error::Fmu(e.to_string())
+}
+
+impl Clone for FmuUnit {
+    /// A fork: the same held values and the instance's state as bytes, restored into a
+    /// new instance on the fork's first event. An FMU that cannot hand over its state
+    /// gives a fork that fails there, naming why.
+    fn clone(&self) -> FmuUnit {
+        let (saved, broken) = match self.capture() {
+            Ok(saved) => (saved, self.broken.clone()),
+            Err(why) => (None, Some(format!("cannot fork: {why}"))),
+        };
+        FmuUnit {
+            time: self.time,
+            published: self.published.clone(),
+            pending: self.pending.clone(),
+            inputs: self.inputs.clone(),
+            saved,
+            broken,
+            fmu: self.fmu.clone(),
+            live: None,
+        }
+    }
+}
+
+/// What a checkpoint stores of a unit.
+#[derive(serde::Serialize, serde::Deserialize)]
+struct Stored {
+    time: SimTime,
+    published: Vec<f64>,
+    pending: Vec<f64>,
+    inputs: Vec<f64>,
+    state: Option<Vec<u8>>,
+}
+
+impl serde::Serialize for FmuUnit {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        let state = self
+            .capture()
+            .map_err(|why| serde::ser::Error::custom(format!("cannot checkpoint: {why}")))?;
+        Stored {
+            time: self.time,
+            published: self.published.clone(),
+            pending: self.pending.clone(),
+            inputs: self.inputs.clone(),
+            state: state.map(|b| b.as_ref().clone()),
+        }
+        .serialize(s)
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for FmuUnit {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        let s = Stored::deserialize(d)?;
+        Ok(FmuUnit {
+            time: s.time,
+            published: s.published,
+            pending: s.pending,
+            inputs: s.inputs,
+            saved: s.state.map(Arc::new),
+            broken: None,
+            fmu: None,
+            live: None,
+        })
+    }
+}
