@@ -83,6 +83,28 @@ pub fn run(scenario: &Scenario, out: &Path) -> Result<Outcome> {
 /// so they refuse exactly what `run` would.
 pub fn preflight(scenario: &Scenario, options: &RunOptions) -> Result<Option<Controller>> {
     budget::Estimate::of(scenario, options.checkpoint_every).check(&options.limits)?;
+    if options.checkpoint_every.is_some() {
+        // A checkpoint holds each FMU's state as bytes.
+        if let Some(f) = scenario
+            .fmus
+            .iter()
+            .find(|f| !(f.can_get_set_state && f.can_serialize_state))
+        {
+            return Err(Error::invalid(
+                "--checkpoint-every",
+                format!(
+                    "a checkpoint stores every FMU's state, and FMU {:?} cannot save it \
+                     (it lacks {})",
+                    f.name,
+                    if f.can_get_set_state {
+                        "canSerializeFMUstate"
+                    } else {
+                        "canGetAndSetFMUstate"
+                    }
+                ),
+            ));
+        }
+    }
     Controller::new(scenario)
 }
 

@@ -392,6 +392,14 @@ impl CoSim {
         &self.nodes
     }
 
+    /// FMU `f`'s outputs (`FmuSpec::outputs` order) as channels and the trace see them
+    /// now.
+    pub fn fmu_outputs(&self, f: usize) -> Vec<f64> {
+        (0..self.scenario.fmus[f].outputs.len())
+            .map(|k| self.fmus[f].output(k))
+            .collect()
+    }
+
     /// The channels.
     pub fn channels(&self) -> &[Channel] {
         &self.channels

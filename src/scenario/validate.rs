@@ -399,6 +399,7 @@ pub fn validate(file: ScenarioFile) -> Result<Scenario> {
         cost_signals,
     };
     check_tdma(&scenario)?;
+    fmus::forks_possible(&scenario)?;
     Ok(scenario)
 }
 

@@ -1,5 +1,5 @@
-//! The PD controller FMU declares no state saving: the loader refuses state calls from
-//! the description's flags, before the FMU is called (the FMU itself would answer
+//! The faulty FMU declares no state saving: the loader refuses state calls from the
+//! description's flags, before the FMU is called (the FMU itself would answer
 //! fmi2Error, which would be a `Status` error instead).
 
 use dsmcosim::fmu::FmuError;
@@ -8,7 +8,7 @@ use crate::fmus::{load, real, start, vr};
 
 #[test]
 fn state_calls_on_an_fmu_without_the_capability_are_refused_before_the_call() {
-    let fmu = load("pd", "controller");
+    let fmu = load("faulty", "controller");
     let cs = fmu
         .description()
         .co_simulation
@@ -31,7 +31,18 @@ fn state_calls_on_an_fmu_without_the_capability_are_refused_before_the_call() {
         }
         other => panic!("deserialize_state: expected the capability refusal, got {other:?}"),
     }
-    // The instance is unharmed: the law u = -kp (x - r) - kd v with the defaults 10, 2, 0.
+    // The instance is unharmed: it steps (before its `fail_at`, 0.5 s) from rest under a
+    // push, so x leaves 0 in the push's direction.
+    inst.set_real(&[vr(&fmu, "F")], &[2.0]).expect("set F");
+    inst.do_step(0.0, 0.01).expect("step");
+    let x = real(&inst, vr(&fmu, "x"));
+    assert!(x > 0.0 && x < 1e-3, "x = {x}");
+}
+
+#[test]
+fn the_pd_controller_computes_its_law_from_the_inputs_it_holds() {
+    let fmu = load("pd", "controller");
+    let mut inst = start(&fmu, "controller", &[]);
     inst.set_real(&[vr(&fmu, "x"), vr(&fmu, "v")], &[0.3, -0.2])
         .expect("set inputs");
     inst.do_step(0.0, 0.01).expect("step");

@@ -12,6 +12,7 @@ mod cosim;
 mod crash;
 mod description;
 mod fmus;
+mod forks;
 mod loading;
 mod logging;
 mod states;

@@ -4,12 +4,12 @@
  *     u = -kp (x - r) - kd v
  *
  * u is a direct-feedthrough algebraic output computed from the current inputs x, v
- * whenever it is read; fmi2DoStep only advances time. The description does not declare
- * canGetAndSetFMUstate, and the state functions refuse, so an importer's capability
- * check can be tested against it.
+ * whenever it is read; fmi2DoStep only advances time. Its state (parameters, held
+ * inputs, time) can be saved and serialized, so a co-simulation of a loop with it can
+ * fork and checkpoint.
  */
 #define MODEL_GUID "{0f6d3b52-8a3c-4c39-b1f2-2c5e9d7a4b02}"
-#define MODEL_CAN_GET_SET_STATE 0
+#define MODEL_CAN_GET_SET_STATE 1
 
 typedef struct {
     double kp, kd, r; /* parameters [N/m], [N s/m], [m] */

@@ -621,7 +621,7 @@ fn link_owners_are_checked() {
 #[test]
 #[rustfmt::skip]
 fn channel_values_are_checked() {
-    invalid(set("/channels", json!([{"name": "a", "tau": 0.01}])), "channels", "needs a `partition` section (got 1 channel(s)");
+    invalid(set("/channels", json!([{"name": "a", "tau": 0.01}])), "channels", "needs a `partition` section or `connections` (got 1 channel(s)");
     invalid(remove_part("/channels"), "channels", "a partition with border links needs channels (got none; 8 border links join 4 pairs of nodes)");
     invalid(set_part("/channels", json!([])), "channels", "needs channels");
     invalid(set_part("/channels/0/name", json!("")), "channels[0].name", "must not be empty");
@@ -674,7 +674,7 @@ fn every_message_travels_on_exactly_one_channel() {
     // A channel on a partition without border links carries nothing.
     let one = put(base(), "/partition", json!({"nodes": [[1, 2, 3]]}));
     let one = put(one, "/channels", json!([{"name": "idle", "tau": 0.01}])).to_string();
-    invalid(one, "channels[0]", "channel \"idle\" carries no message (the partition has no border links)");
+    invalid(one, "channels[0]", "channel \"idle\" carries no message (no border link or connection uses it)");
 }
 
 #[test]

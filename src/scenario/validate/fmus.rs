@@ -13,7 +13,8 @@ use crate::fmu::{Causality, Fmu, ModelDescription, ScalarVariable, VarKind, Vari
 use crate::kernel::SimTime;
 use crate::scenario::file::{ConnectionFile, FmuFile};
 use crate::scenario::model::{
-    ChannelSpec, ConnectionSpec, DataKind, FmuSpec, FmuStart, FmuValueKind, FmuVar,
+    ChannelSpec, ConnectionSpec, DataKind, FmuSpec, FmuStart, FmuValueKind, FmuVar, Measure,
+    Scenario,
 };
 
 /// At most this many FMUs in a scenario: each is unpacked into its own directory and
@@ -509,4 +510,43 @@ fn spec(
         inputs,
         logging: f.logging,
     })
+}
+
+/// A controller that measures on forks (lookahead, baselines) needs every FMU to hand
+/// over its state: refused here, naming the FMU and the capability it lacks, rather than
+/// at the first window.
+pub(super) fn forks_possible(s: &Scenario) -> Result<()> {
+    let Some(c) = &s.controller else {
+        return Ok(());
+    };
+    let (path, why) = if c.measure == Measure::Lookahead {
+        (
+            "controller.measure",
+            "lookahead measurement runs every candidate on a fork",
+        )
+    } else if !c.baselines.is_empty() {
+        ("controller.baselines", "baselines are measured on forks")
+    } else {
+        return Ok(());
+    };
+    for f in &s.fmus {
+        let missing = if !f.can_get_set_state {
+            "canGetAndSetFMUstate"
+        } else if !f.can_serialize_state {
+            "canSerializeFMUstate"
+        } else if f.only_once_per_process {
+            "several instances per process (it declares canBeInstantiatedOnlyOncePerProcess)"
+        } else {
+            continue;
+        };
+        return Err(Error::invalid(
+            path,
+            format!(
+                "{why}, and FMU {:?} cannot be forked: it lacks {missing}; use \
+                 \"measure\": \"online\" without baselines",
+                f.name
+            ),
+        ));
+    }
+    Ok(())
 }
