@@ -17,7 +17,9 @@ use crate::network::tdma::{tdma_node, CycleReport, TdmaError};
 use crate::network::{Channel, Message, Payload};
 use crate::partition::line::LineSet;
 use crate::partition::{Layout, Node};
-use crate::scenario::model::{BodyModel, BodySpec, DataKind, NetworkSpec, Scenario};
+use crate::scenario::model::{
+    BodyModel, BodySpec, DataKind, NetworkSpec, Scenario, SignalSink, SignalSource,
+};
 use crate::trace::Invariants;
 
 /// The values of one step, as observers (trace recorder, digest) see them: the whole
@@ -157,8 +159,8 @@ pub fn channels_of(scenario: &Scenario, layout: &Layout) -> Vec<Channel> {
             .routes
             .push(crate::partition::layout::Route {
                 kind: DataKind::Signal,
-                from: scenario.fmus[c.from].node,
-                to: scenario.fmus[c.to].node,
+                from: c.from_node(scenario),
+                to: c.to_node(scenario),
                 body: i,
                 link: None,
             });
@@ -593,8 +595,12 @@ impl CoSim {
                 self.messages += 1;
                 obs.on_delivery(t, &msg);
                 if let Payload::Signal { connection, value } = msg.payload {
-                    let c = &self.scenario.connections[connection];
-                    self.fmus[c.to].set_input(c.input, value);
+                    match self.scenario.connections[connection].to {
+                        SignalSink::Fmu { fmu, input } => self.fmus[fmu].set_input(input, value),
+                        SignalSink::BodyForce { body, axis } => {
+                            self.nodes[msg.to].set_input_force(body, axis, value)
+                        }
+                    }
                     return Ok(());
                 }
                 // The nodes' state is that of the next step's time.
@@ -727,7 +733,12 @@ impl CoSim {
     fn message(&mut self, t: SimTime, c: usize, r: usize) -> Option<Message> {
         let route = self.channels[c].routes[r];
         if route.kind == DataKind::Signal {
-            let conn = &self.scenario.connections[route.body];
+            let value = match self.scenario.connections[route.body].from {
+                SignalSource::Fmu { fmu, output } => self.fmus[fmu].output(output),
+                SignalSource::Body { body, quantity } => {
+                    self.nodes[route.from].body_value(body, quantity)
+                }
+            };
             return Some(Message {
                 from: route.from,
                 to: route.to,
@@ -735,7 +746,7 @@ impl CoSim {
                 sent: t,
                 payload: Payload::Signal {
                     connection: route.body,
-                    value: self.fmus[conn.from].output(conn.output),
+                    value,
                 },
             });
         }

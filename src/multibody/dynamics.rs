@@ -153,6 +153,9 @@ impl System {
                 }
             }
         }
+        for (f, input) in self.ws.force.iter_mut().zip(&self.input_force) {
+            *f += input;
+        }
         // Later stages of a step carry the extra loads by their rates (the first stage,
         // at their own time, adds nothing, so single-stage schemes keep their bits).
         let rate = &self.extra_rate;

@@ -48,6 +48,9 @@ pub struct System {
     /// Extra external force per body [N], held constant over a step (used for border
     /// forces received from other partitions; zero on a monolithic run).
     pub extra_force: Vec<Vector3<f64>>,
+    /// Forces set by connections (`B<id>.fx` …) per body [N], held between deliveries;
+    /// empty until the first (so a scene without them adds no arithmetic).
+    pub input_force: Vec<Vector3<f64>>,
     /// Extra external torque per body [N·m] (rigid path only; empty on point masses).
     pub extra_torque: Vec<Vector3<f64>>,
     /// Rate of each body's extra force [N/s] and torque [N·m/s] (empty: held constant).
@@ -201,6 +204,7 @@ impl System {
             integrator: scenario.integrator,
             dt: scenario.dt,
             extra_force: vec![v3(); nb],
+            input_force: Vec::new(),
             extra_torque: vec![v3(); if rigid { nb } else { 0 }],
             extra_rate: ExtraRate::default(),
             mass,
@@ -322,6 +326,14 @@ impl System {
     /// Number of bodies.
     pub fn body_count(&self) -> usize {
         self.extra_force.len()
+    }
+
+    /// Sets component `axis` of the connection-set force on body `b` [N].
+    pub fn set_input_force(&mut self, b: usize, axis: usize, value: f64) {
+        if self.input_force.is_empty() {
+            self.input_force = vec![Vector3::zeros(); self.extra_force.len()];
+        }
+        self.input_force[b][axis] = value;
     }
 
     /// Number of links.

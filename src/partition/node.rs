@@ -248,6 +248,26 @@ impl Node {
         self.local_body.get(&g).copied()
     }
 
+    /// A coordinate of owned body `g`'s state now: position x, y, z [m] for `quantity`
+    /// 0–2, velocity [m/s] for 3–5 (a connection's `B<id>.px` … `B<id>.vz`).
+    pub fn body_value(&self, g: usize, quantity: usize) -> f64 {
+        let b = self
+            .local(g)
+            .expect("ok: a body connection samples on the body's own node");
+        match quantity {
+            0..=2 => self.state.p[b][quantity],
+            _ => self.state.v[b][quantity - 3],
+        }
+    }
+
+    /// A delivered force component on owned body `g` [N], held until the next.
+    pub fn set_input_force(&mut self, g: usize, axis: usize, value: f64) {
+        let b = self
+            .local(g)
+            .expect("ok: a body force is delivered to the body's own node");
+        self.system.set_input_force(b, axis, value);
+    }
+
     /// The state message for owned body `g` (global) to node `receiver`, at time `t`:
     /// the body's state and the owner-side load, i.e. the external force plus every link
     /// force on the body that the receiver does not compute itself (this node's links

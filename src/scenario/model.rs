@@ -811,17 +811,73 @@ pub enum FmuValueKind {
     Boolean,
 }
 
-/// A validated connection: output `output` of FMU `from` to input `input` of FMU `to`.
+/// A validated connection: a source's value carried by a channel to a sink.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ConnectionSpec {
-    /// Source FMU (index into `fmus`).
-    pub from: usize,
-    /// Index into the source's `outputs`.
-    pub output: usize,
-    /// Target FMU.
-    pub to: usize,
-    /// Index into the target's `inputs`.
-    pub input: usize,
+    /// What is sampled.
+    pub from: SignalSource,
+    /// What the delivered value sets.
+    pub to: SignalSink,
     /// Channel carrying it.
     pub channel: usize,
+}
+
+/// The sampled end of a connection.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum SignalSource {
+    /// Output `output` (index into the FMU's `outputs`) of FMU `fmu`.
+    Fmu {
+        /// FMU index.
+        fmu: usize,
+        /// Index into its `outputs`.
+        output: usize,
+    },
+    /// A coordinate of a body's state, `B<id>.px` … `B<id>.vz`: position [m] for
+    /// `quantity` 0–2 (x, y, z), velocity [m/s] for 3–5.
+    Body {
+        /// Body index.
+        body: usize,
+        /// 0–2: position x, y, z; 3–5: velocity x, y, z.
+        quantity: usize,
+    },
+}
+
+/// The set end of a connection.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum SignalSink {
+    /// Input `input` (index into the FMU's `inputs`) of FMU `fmu`.
+    Fmu {
+        /// FMU index.
+        fmu: usize,
+        /// Index into its `inputs`.
+        input: usize,
+    },
+    /// A component of a force [N] on a body's centre, `B<id>.fx` … `B<id>.fz`, held
+    /// from each delivery until the next.
+    BodyForce {
+        /// Body index.
+        body: usize,
+        /// 0, 1, 2: x, y, z.
+        axis: usize,
+    },
+}
+
+impl ConnectionSpec {
+    /// Node (0-based) whose values the source samples.
+    pub fn from_node(&self, s: &Scenario) -> usize {
+        match self.from {
+            SignalSource::Fmu { fmu, .. } => s.fmus[fmu].node,
+            SignalSource::Body { body, .. } => s.partition.as_ref().map_or(0, |p| p.node_of[body]),
+        }
+    }
+
+    /// Node (0-based) that receives the value.
+    pub fn to_node(&self, s: &Scenario) -> usize {
+        match self.to {
+            SignalSink::Fmu { fmu, .. } => s.fmus[fmu].node,
+            SignalSink::BodyForce { body, .. } => {
+                s.partition.as_ref().map_or(0, |p| p.node_of[body])
+            }
+        }
+    }
 }

@@ -347,6 +347,10 @@ pub fn validate(file: ScenarioFile) -> Result<Scenario> {
     } = fmus::fmus(
         &file.fmus,
         &file.connections,
+        &fmus::ModelView {
+            ids: &ids,
+            partitioned: partition.is_some(),
+        },
         file.measurement.signals.as_deref(),
         file.base_dir.as_deref(),
         (dt, duration),

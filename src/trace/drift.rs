@@ -41,8 +41,12 @@ struct Stretch {
 /// every step between them runs with no force at all. Stretches with fewer than one
 /// step are left out.
 pub fn undriven_stretches(scenario: &Scenario) -> Vec<(u64, u64)> {
-    // Gravity drives the net all the time.
-    if scenario.gravity.is_some() {
+    // Gravity drives the net all the time, and so may a force a connection sets.
+    let connected_force = scenario
+        .connections
+        .iter()
+        .any(|c| matches!(c.to, crate::scenario::model::SignalSink::BodyForce { .. }));
+    if scenario.gravity.is_some() || connected_force {
         return Vec::new();
     }
     let (dt, end) = (scenario.dt.0, scenario.duration.0);

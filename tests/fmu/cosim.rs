@@ -337,3 +337,61 @@ fn the_delayed_loop_converges_to_the_delay_differential_equation() {
         assert!(o > 0.8, "order {o} (errors {errors:?})");
     }
 }
+
+/// The networked-control case: the multibody model's body 1 (1 kg, free, at x = 1 m)
+/// on node 1, the PD controller FMU on node 2 reading its position and velocity and
+/// setting the force on it, over two channels.
+fn body_loop(dt: f64, duration: f64) -> Value {
+    json!({
+        "name": "body_pd_loop",
+        "seed": 1,
+        "duration": duration,
+        "dt": dt,
+        "integrator": "rk4",
+        "measurement": {"period": duration},
+        "output": {"decimation": 1},
+        "model": {"bodies": [{"id": 1, "mass": M, "size": 0.1, "position": [X0, 0.0, 0.0]}]},
+        "fmus": [
+            {"name": "ctrl", "path": "pd.fmu", "node": 2,
+             "start": {"kp": KP, "kd": KD, "r": 0.0}}
+        ],
+        "channels": [
+            {"name": "sense", "tau": dt, "latency": 0.0},
+            {"name": "act", "tau": dt, "latency": 0.0}
+        ],
+        "connections": [
+            {"from": "B1.px", "to": "ctrl.x", "channel": "sense"},
+            {"from": "B1.vx", "to": "ctrl.v", "channel": "sense"},
+            {"from": "ctrl.u", "to": "B1.fx", "channel": "act"}
+        ]
+    })
+}
+
+#[test]
+fn a_controller_fmu_steers_a_body_of_the_multibody_model_over_the_network() {
+    // m ẍ = −kp x − kd ẋ: the closed form with the plant's own spring and damper zero.
+    let closed = |t: f64| {
+        let w = (KP / M).sqrt();
+        let zeta = KD / (2.0 * (KP * M).sqrt());
+        let wd = w * (1.0 - zeta * zeta).sqrt();
+        (-zeta * w * t).exp() * (X0 * (wd * t).cos() + (zeta * w * X0 / wd) * (wd * t).sin())
+    };
+    let dir = scratch("body");
+    fmus(&dir);
+    let mut errors = Vec::new();
+    for dt in [2e-3, 1e-3, 5e-4] {
+        let (t, cols, _) = run(&dir, &body_loop(dt, 3.0), &["px_B1", "ctrl.u"]);
+        let err = t
+            .iter()
+            .zip(&cols[0])
+            .map(|(&t, &x)| (x - closed(t)).abs())
+            .fold(0.0, f64::max);
+        errors.push(err);
+    }
+    let orders: Vec<f64> = errors.windows(2).map(|e| (e[0] / e[1]).log2()).collect();
+    println!("body loop: max errors {errors:?}, orders {orders:?}");
+    assert!(errors[2] < 2e-2, "error at dt = 0.5 ms: {}", errors[2]);
+    for o in orders {
+        assert!((0.85..1.2).contains(&o), "order {o} (errors {errors:?})");
+    }
+}

@@ -7,6 +7,7 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use super::bodies::Ids;
 use super::checks::{num, whole_nanos};
 use crate::error::{Error, Result};
 use crate::fmu::{Causality, Fmu, ModelDescription, ScalarVariable, VarKind, Variability};
@@ -14,7 +15,7 @@ use crate::kernel::SimTime;
 use crate::scenario::file::{ConnectionFile, FmuFile};
 use crate::scenario::model::{
     ChannelSpec, ConnectionSpec, DataKind, FmuSpec, FmuStart, FmuValueKind, FmuVar, Measure,
-    Scenario,
+    Scenario, SignalSink, SignalSource,
 };
 
 /// At most this many FMUs in a scenario: each is unpacked into its own directory and
@@ -36,6 +37,7 @@ pub(super) struct Fmus {
 pub(super) fn fmus(
     list: &[FmuFile],
     connections: &[ConnectionFile],
+    model: &ModelView,
     cost: Option<&[String]>,
     base: Option<&Path>,
     (dt, duration): (SimTime, SimTime),
@@ -59,7 +61,7 @@ pub(super) fn fmus(
     if list.is_empty() && !connections.is_empty() {
         return Err(Error::invalid(
             "connections",
-            "connect FMUs, and the scenario has no `fmus`",
+            "connect FMUs (or FMUs and bodies), and the scenario has no `fmus`",
         ));
     }
     let mut names = BTreeMap::new();
@@ -79,21 +81,32 @@ pub(super) fn fmus(
     let mut wired_out: Vec<Vec<String>> = vec![Vec::new(); list.len()];
     let mut wired_in: Vec<Vec<String>> = vec![Vec::new(); list.len()];
     let mut ends = Vec::with_capacity(connections.len());
-    let mut fed: BTreeMap<(usize, String), usize> = BTreeMap::new();
+    let mut fed: BTreeMap<String, usize> = BTreeMap::new();
     for (i, c) in connections.iter().enumerate() {
         let path = format!("connections[{i}]");
-        let (from, out) = endpoint(&format!("{path}.from"), &c.from, &names, &loaded)?;
-        check_causality(
-            &format!("{path}.from"),
-            &list[from].name,
-            out,
-            Causality::Output,
-        )?;
-        let (to, inp) = endpoint(&format!("{path}.to"), &c.to, &names, &loaded)?;
-        check_causality(&format!("{path}.to"), &list[to].name, inp, Causality::Input)?;
-        if let Some(first) = fed.insert((to, inp.name.clone()), i) {
+        let from_path = format!("{path}.from");
+        let from = match body_end(&from_path, &c.from, model, true)? {
+            Some((body, quantity)) => End::Body(body, quantity),
+            None => {
+                let (f, out) = endpoint(&from_path, &c.from, &names, &loaded)?;
+                check_causality(&from_path, &list[f].name, out, Causality::Output)?;
+                wired_out[f].push(out.name.clone());
+                End::Fmu(f, out.name.clone())
+            }
+        };
+        let to_path = format!("{path}.to");
+        let to = match body_end(&to_path, &c.to, model, false)? {
+            Some((body, axis)) => End::Body(body, axis),
+            None => {
+                let (f, inp) = endpoint(&to_path, &c.to, &names, &loaded)?;
+                check_causality(&to_path, &list[f].name, inp, Causality::Input)?;
+                wired_in[f].push(inp.name.clone());
+                End::Fmu(f, inp.name.clone())
+            }
+        };
+        if let Some(first) = fed.insert(c.to.clone(), i) {
             return Err(Error::invalid(
-                format!("{path}.to"),
+                to_path,
                 format!("{:?} is already fed by connections[{first}]", c.to),
             ));
         }
@@ -125,9 +138,7 @@ pub(super) fn fmus(
                 format!("channel {:?} lists its kinds without \"signal\"", c.channel),
             ));
         }
-        wired_out[from].push(out.name.clone());
-        wired_in[to].push(inp.name.clone());
-        ends.push((from, out.name.clone(), to, inp.name.clone(), channel));
+        ends.push((from, to, channel));
     }
     let mut cost_ends = Vec::new();
     for (i, text) in cost.unwrap_or(&[]).iter().enumerate() {
@@ -169,11 +180,21 @@ pub(super) fn fmus(
     }
     let connections = ends
         .into_iter()
-        .map(|(from, out, to, inp, channel)| ConnectionSpec {
-            from,
-            output: index_of(&specs[from].outputs, &out),
-            to,
-            input: index_of(&specs[to].inputs, &inp),
+        .map(|(from, to, channel)| ConnectionSpec {
+            from: match from {
+                End::Fmu(fmu, name) => SignalSource::Fmu {
+                    fmu,
+                    output: index_of(&specs[fmu].outputs, &name),
+                },
+                End::Body(body, quantity) => SignalSource::Body { body, quantity },
+            },
+            to: match to {
+                End::Fmu(fmu, name) => SignalSink::Fmu {
+                    fmu,
+                    input: index_of(&specs[fmu].inputs, &name),
+                },
+                End::Body(body, axis) => SignalSink::BodyForce { body, axis },
+            },
             channel,
         })
         .collect();
@@ -188,6 +209,65 @@ pub(super) fn fmus(
     })
 }
 
+/// A connection end as validated: an FMU's variable, or a body's quantity or axis.
+enum End {
+    Fmu(usize, String),
+    Body(usize, usize),
+}
+
+/// What the FMU stage needs of the multibody model: body ids, and whether it is split.
+pub(super) struct ModelView<'a> {
+    pub ids: &'a Ids,
+    pub partitioned: bool,
+}
+
+/// The body quantities a connection reads (`B<id>.px` …) and the force axes it sets.
+const BODY_OUTPUTS: [&str; 6] = ["px", "py", "pz", "vx", "vy", "vz"];
+const BODY_INPUTS: [&str; 3] = ["fx", "fy", "fz"];
+
+/// `B<id>.<q>`: a body end (body index, quantity or axis), or `None` for an FMU end.
+fn body_end(
+    path: &str,
+    text: &str,
+    model: &ModelView,
+    output: bool,
+) -> Result<Option<(usize, usize)>> {
+    let Some((head, q)) = text.split_once('.') else {
+        return Ok(None);
+    };
+    let Some(id) = head
+        .strip_prefix('B')
+        .filter(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
+    else {
+        return Ok(None);
+    };
+    let id: u32 = id
+        .parse()
+        .map_err(|_| Error::invalid(path, format!("body id out of range in {text:?}")))?;
+    let body = model.ids.index(path, id)?;
+    let (names, what): (&[&str], &str) = if output {
+        (
+            &BODY_OUTPUTS,
+            "a source reads a body's px, py, pz, vx, vy or vz",
+        )
+    } else {
+        (&BODY_INPUTS, "a target sets a body's force fx, fy or fz")
+    };
+    let Some(k) = names.iter().position(|n| *n == q) else {
+        return Err(Error::invalid(path, format!("{what} (got {text:?})")));
+    };
+    if !output && model.partitioned {
+        return Err(Error::invalid(
+            path,
+            format!(
+                "a force on a body of a partitioned model is not supported: the other \
+                 nodes' coupling would not see it (got {text:?}); run the model on one node"
+            ),
+        ));
+    }
+    Ok(Some((body, k)))
+}
+
 fn index_of(vars: &[FmuVar], name: &str) -> usize {
     vars.iter()
         .position(|v| v.name == name)
@@ -198,6 +278,15 @@ fn index_of(vars: &[FmuVar], name: &str) -> usize {
 fn name(path: &str, name: &str) -> Result<()> {
     if name.is_empty() {
         return Err(Error::invalid(path, "must not be empty"));
+    }
+    if name
+        .strip_prefix('B')
+        .is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
+    {
+        return Err(Error::invalid(
+            path,
+            format!("{name:?} reads as a body (B<id>.px …); give the FMU another name"),
+        ));
     }
     if !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
         return Err(Error::invalid(
