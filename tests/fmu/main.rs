@@ -11,6 +11,7 @@ mod closed_form;
 mod cosim;
 mod crash;
 mod description;
+mod errors;
 mod fmus;
 mod forks;
 mod loading;
