@@ -30,6 +30,9 @@ for arg in "$@"; do
   esac
 done
 cargo build --release --quiet || exit 1
+# The FMU scenes (scenarios/fmu_*.json) read the test FMUs from scenarios/fmu/, built
+# from tests/fmus/ (not in the repository: they are build products).
+cargo run --release --quiet --example build_fmus -- scenarios/fmu >/dev/null || exit 1
 bin=target/release/dsmcosim
 key() { python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])" "$1" "$2"; }
 tmp=$(mktemp -d results/.regenerate.XXXXXX) || exit 1

@@ -602,24 +602,42 @@ fn write_plots(out: &Path, world: &CoSim, rec: &Recorder) -> Result<()> {
     } else {
         "constraint value w [m]"
     };
-    plot(
-        out,
-        "constraints.svg",
-        &title(&what),
-        time,
-        axis,
-        &envelope::summarize(&links, noun, WORST_LINKS),
-        false,
-    )?;
-    plot(
-        out,
-        "bodies.svg",
-        &title("body coordinates"),
-        time,
-        "position [m]",
-        &rec.body_series(),
-        false,
-    )?;
+    // A scene of FMUs only has no links and no bodies to draw.
+    if !links.is_empty() {
+        plot(
+            out,
+            "constraints.svg",
+            &title(&what),
+            time,
+            axis,
+            &envelope::summarize(&links, noun, WORST_LINKS),
+            false,
+        )?;
+    }
+    let bodies = rec.body_series();
+    if !bodies.is_empty() {
+        plot(
+            out,
+            "bodies.svg",
+            &title("body coordinates"),
+            time,
+            "position [m]",
+            &bodies,
+            false,
+        )?;
+    }
+    let signals = rec.signal_series();
+    if !signals.is_empty() {
+        plot(
+            out,
+            "signals.svg",
+            &title("FMU outputs"),
+            time,
+            "output value [the variable's unit]",
+            &signals,
+            false,
+        )?;
+    }
     let spins = rec.angular_velocity_series();
     if !spins.is_empty() {
         plot(

@@ -55,7 +55,9 @@ impl CostMeter {
     pub fn close(&mut self, end: SimTime) -> &Epoch {
         let dt = self.dt.as_secs_f64();
         let length = end.0.saturating_sub(self.start.0) as f64 * 1e-9;
-        let cost = if self.steps == 0 || length <= 0.0 {
+        // No links (a scene of FMUs only, without `measurement.signals`): 0, not the
+        // empty sum's -0.
+        let cost = if self.steps == 0 || length <= 0.0 || self.sum_sq.is_empty() {
             0.0
         } else {
             self.sum_sq

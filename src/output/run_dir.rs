@@ -55,6 +55,7 @@ pub const PLOTS: &[&str] = &[
     "constraints.svg",
     "bodies.svg",
     "angular_velocity.svg",
+    "signals.svg",
     "cost.svg",
     "delays.svg",
     "bandwidth.svg",

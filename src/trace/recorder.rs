@@ -79,6 +79,14 @@ pub struct Recorder {
     /// quoted where CSV needs it), after everything else; empty without FMUs.
     #[serde(default)]
     signal_names: Vec<String>,
+    /// The traced FMU outputs for signals.svg, one first series each, bounded in length
+    /// as `plots`.
+    #[serde(default = "no_plot_samples")]
+    signal_plots: PlotSamples,
+}
+
+fn no_plot_samples() -> PlotSamples {
+    PlotSamples::new(0, 0)
 }
 
 impl Recorder {
@@ -142,6 +150,7 @@ impl Recorder {
                     .map(move |v| crate::output::csv_field(&format!("{}.{}", f.name, v.name)))
             })
             .collect();
+        r.signal_plots = PlotSamples::new(0, r.signal_names.len());
         if let Some(f) = file {
             r.start_file(f, &ids)?;
         }
@@ -187,6 +196,7 @@ impl Recorder {
             invariants: InvariantLog::new(&[]),
             layer: None,
             signal_names: Vec::new(),
+            signal_plots: no_plot_samples(),
         }
     }
 
@@ -269,6 +279,10 @@ impl Recorder {
         }
         self.rows += 1;
         let t = s.time.as_secs_f64();
+        if !s.signals.is_empty() {
+            self.signal_plots
+                .push(t, std::iter::empty(), s.signals.iter().copied());
+        }
         let omega = |i: usize, ax: usize| s.omega.get(i).map_or(0.0, |w| w[ax]);
         let spins = self
             .plot_bodies
@@ -486,6 +500,17 @@ impl Recorder {
             }
         }
         out
+    }
+
+    /// Series for signals.svg: each traced FMU output, named as its trace column;
+    /// empty without FMUs.
+    pub fn signal_series(&self) -> Vec<Series> {
+        let p = &self.signal_plots;
+        self.signal_names
+            .iter()
+            .zip(&p.firsts)
+            .map(|(name, s)| Series::new(name.trim_matches('"').to_string(), zip(&p.times, s)))
+            .collect()
     }
 
     /// Series for the angular-velocity plot (with `output.trace_rotation`): ωx, ωy, ωz

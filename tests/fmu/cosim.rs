@@ -429,8 +429,16 @@ fn a_loop_of_fmus_runs_over_a_tdma_network_with_the_same_digest_on_any_thread_co
     assert_eq!(one, two, "thread counts gave different digests");
     // Both nodes sent frames, and the loop (delays of a few ms) settles as the ideal one.
     let mut net = csv::Reader::from_path(out.join("network.csv")).expect("network.csv");
-    let sender = net.headers().unwrap().iter().position(|h| h == "sender").unwrap();
-    let mut senders: Vec<String> = net.records().map(|r| r.unwrap()[sender].to_string()).collect();
+    let sender = net
+        .headers()
+        .unwrap()
+        .iter()
+        .position(|h| h == "sender")
+        .unwrap();
+    let mut senders: Vec<String> = net
+        .records()
+        .map(|r| r.unwrap()[sender].to_string())
+        .collect();
     senders.sort();
     senders.dedup();
     // Node 0 is the TDMA server (its static frames carry the slot list).

@@ -213,10 +213,18 @@ fn on_the_command_line_a_bad_fmu_scene_exits_2_and_writes_nothing() {
     let v = set(base(), "/connections/0/from", json!("plant.xx"));
     std::fs::write(&path, v.to_string()).unwrap();
     let out = dir.join("out");
-    let o = dsmcosim(&["run", path.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let o = dsmcosim(&[
+        "run",
+        path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{stderr}");
-    assert!(stderr.contains("connections[0].from") && stderr.contains("\"xx\""), "{stderr}");
+    assert!(
+        stderr.contains("connections[0].from") && stderr.contains("\"xx\""),
+        "{stderr}"
+    );
     assert!(!out.exists(), "a refused scene writes nothing");
 }
 
@@ -234,7 +242,12 @@ fn an_fmu_that_returns_an_error_stops_the_run_with_exit_3_naming_it() {
     let path = dir.join("scenario.json");
     std::fs::write(&path, v.to_string()).unwrap();
     let out = dir.join("out");
-    let o = dsmcosim(&["run", path.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let o = dsmcosim(&[
+        "run",
+        path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(3), "{stderr}");
     assert!(
@@ -261,7 +274,12 @@ fn a_crash_inside_an_fmu_kills_the_run_by_its_signal_and_is_no_panic() {
     let path = dir.join("scenario.json");
     std::fs::write(&path, v.to_string()).unwrap();
     let out = dir.join("out");
-    let o = dsmcosim(&["run", path.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let o = dsmcosim(&[
+        "run",
+        path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     use std::os::unix::process::ExitStatusExt;
     assert_eq!(o.status.signal(), Some(11), "{:?} {stderr}", o.status);

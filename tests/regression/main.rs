@@ -17,6 +17,9 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use dsmcosim::check::{read_summary, rerun, Report, RunSummary, Verdict};
+
+#[path = "../support/fmu_build.rs"]
+mod fmu_build;
 use dsmcosim::trace::compare::Tolerance;
 
 /// Stored runs whose recorded wall time exceeds this are not rerun in CI [s]. Above
@@ -67,6 +70,30 @@ fn stored_runs(results: &Path) -> (Vec<Stored>, Vec<String>) {
     (runs, without)
 }
 
+/// Loads a shipped scenario. One with FMUs reads them (`fmu/*.fmu` beside it, which
+/// a checkout does not hold: `cargo run --example build_fmus -- scenarios/fmu` builds
+/// them for users) from the test FMUs built here into `scratch/fmu/`, as if the file
+/// lay in `scratch`.
+fn load(file: &Path, scratch: &Path) -> dsmcosim::scenario::Scenario {
+    let text = std::fs::read_to_string(file).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+    let label = file.display().to_string();
+    let fmus: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+    if fmus.get("fmus").is_none() {
+        return dsmcosim::scenario::parse_at(&text, &label, Some(file))
+            .unwrap_or_else(|e| panic!("{label}: {e}"));
+    }
+    let dir = scratch.join("fmu");
+    std::fs::create_dir_all(&dir).expect("scratch");
+    for stem in fmu_build::TEST_FMUS {
+        if !dir.join(format!("{stem}.fmu")).exists() {
+            fmu_build::build_test_fmu(stem, &dir).unwrap_or_else(|e| panic!("{stem}: {e}"));
+        }
+    }
+    let beside = scratch.join(file.file_name().expect("a file name"));
+    dsmcosim::scenario::parse_at(&text, &label, Some(&beside))
+        .unwrap_or_else(|e| panic!("{label}: {e}"))
+}
+
 #[test]
 fn every_stored_run_reproduces_its_digest_and_csv_files() {
     let (runs, without) = stored_runs(&repo().join("results"));
@@ -108,8 +135,7 @@ fn every_stored_run_reproduces_its_digest_and_csv_files() {
             .expect("a results/ subdirectory")
             .to_string_lossy()
             .into_owned();
-        let scenario = dsmcosim::scenario::load(&run.scenario_file)
-            .unwrap_or_else(|e| panic!("{}: {e}", run.scenario_file.display()));
+        let scenario = load(&run.scenario_file, &scratch);
         let started = Instant::now();
         let new = rerun(&scenario, &scratch.join(&name))
             .unwrap_or_else(|e| panic!("rerunning {name}: {e}"));

@@ -78,6 +78,9 @@ pub fn write_zip(out: &Path, entries: &[(String, PathBuf)]) -> Result<(), String
     let mut zip = zip::ZipWriter::new(file);
     let options = zip::write::SimpleFileOptions::default()
         .compression_method(zip::CompressionMethod::Deflated)
+        // A fixed time (the format's epoch, 1980-01-01) instead of now: the same sources
+        // build the same bytes, so an FMU's hash in summary.json is reproducible.
+        .last_modified_time(zip::DateTime::default())
         .unix_permissions(0o644);
     for (name, path) in entries {
         let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
