@@ -46,6 +46,8 @@ pub struct ChannelPlan {
     pub state_routes: usize,
     /// Force routes (border-link forces) it carries.
     pub force_routes: usize,
+    /// FMU connections it carries.
+    pub signal_routes: usize,
 }
 
 /// One dynamic slot of the TDMA cycle.
@@ -133,6 +135,8 @@ pub struct RunPlan {
     pub controller: Option<Value>,
     /// The cost.
     pub cost: CostPlan,
+    /// The FMUs, one line each: name, node, step, model and what it exchanges.
+    pub fmus: Vec<String>,
 }
 
 /// The plan of a validated `scenario`.
@@ -209,6 +213,7 @@ pub fn plan(scenario: &Scenario) -> Result<RunPlan> {
                 bandwidth: a.map(|a| c.spec.k / a.as_secs_f64()),
                 state_routes: count(DataKind::State),
                 force_routes: count(DataKind::Force),
+                signal_routes: count(DataKind::Signal),
             }
         })
         .collect();
@@ -256,6 +261,28 @@ pub fn plan(scenario: &Scenario) -> Result<RunPlan> {
         },
         nodes,
         channels: channel_plans,
+        fmus: s
+            .fmus
+            .iter()
+            .map(|f| {
+                format!(
+                    "{} on node {}, step {} ms: model {} (FMI {}{}), {} output(s) read, {} \
+                     input(s) set",
+                    f.name,
+                    f.node + 1,
+                    f.step.as_secs_f64() * 1e3,
+                    f.model_identifier,
+                    f.fmi_version,
+                    if f.can_get_set_state && f.can_serialize_state {
+                        ", forkable"
+                    } else {
+                        ", not forkable: online measurement only"
+                    },
+                    f.outputs.len(),
+                    f.inputs.len()
+                )
+            })
+            .collect(),
         tdma,
         controller: s
             .controller
@@ -328,15 +355,21 @@ impl RunPlan {
                 ));
             }
         }
+        if !self.fmus.is_empty() {
+            out.push("FMUs:".into());
+            for f in &self.fmus {
+                out.push(format!("  {f}"));
+            }
+        }
         if !self.channels.is_empty() {
             out.push(format!("{} network, channels:", self.network));
             out.push(
-                "  name | τ requested [ms] | τ achieved [ms] | latency [ms] | k | bandwidth [1/s] | routes (state + force)"
+                "  name | τ requested [ms] | τ achieved [ms] | latency [ms] | k | bandwidth [1/s] | routes (state + force + signal)"
                     .into(),
             );
             for c in &self.channels {
                 out.push(format!(
-                    "  {} | {} | {} | {} | {} | {} | {} + {}",
+                    "  {} | {} | {} | {} | {} | {} | {} + {} + {}",
                     c.name,
                     ms(c.tau_requested),
                     c.tau_achieved.map_or("never served".into(), ms),
@@ -344,7 +377,8 @@ impl RunPlan {
                     c.k,
                     c.bandwidth.map_or("–".into(), |b| format!("{b:.1}")),
                     c.state_routes,
-                    c.force_routes
+                    c.force_routes,
+                    c.signal_routes
                 ));
             }
         }
