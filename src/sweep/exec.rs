@@ -192,6 +192,19 @@ fn define(sweep_path: &Path, sets: &[String]) -> Result<Defined> {
             ),
         ));
     }
+    // The points are validated from text, not from the base's file: an FMU path
+    // relative to the base (as a scenario's is) becomes one relative to where the base
+    // lies, so it reads the same file from every point.
+    if let Some(fmus) = base.get_mut("fmus").and_then(Value::as_array_mut) {
+        let dir = base_path.parent().unwrap_or(Path::new(""));
+        for f in fmus {
+            if let Some(Value::String(path)) = f.get_mut("path") {
+                if Path::new(path.as_str()).is_relative() && !dir.as_os_str().is_empty() {
+                    *path = dir.join(path.as_str()).display().to_string();
+                }
+            }
+        }
+    }
     // The base's digest (which `--resume` and `sweep-merge` compare) covers the
     // overrides: the same file under other `--set`s is another base.
     let mut digest = blake3::Hasher::new();

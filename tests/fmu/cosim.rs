@@ -4,10 +4,12 @@
 //! delayed loop written in this file, and the stability boundary of the delayed PD
 //! loop from its characteristic equation.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use dsmcosim::run::{run_with, RunOptions};
 use serde_json::{json, Value};
+
+use crate::fmus::scratch;
 
 use crate::fmu_build::build_test_fmu;
 
@@ -19,17 +21,6 @@ const X0: f64 = 1.0;
 /// The controller's gains.
 const KP: f64 = 10.0;
 const KD: f64 = 2.0;
-
-fn scratch(name: &str) -> PathBuf {
-    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("target")
-        .join("test-scratch")
-        .join("fmu-cosim")
-        .join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("scratch");
-    d
-}
 
 /// Builds msd.fmu and pd.fmu into `dir`.
 fn fmus(dir: &Path) {
@@ -107,7 +98,7 @@ fn the_undelayed_loop_converges_to_the_closed_form_at_first_order() {
     // τ = dt, latency 0: the co-simulation's own one-step lag (a Jacobi scheme: each
     // FMU steps on the other's output of the previous communication point) is all that
     // separates it from the continuous loop, so the error halves with dt.
-    let dir = scratch("undelayed");
+    let dir = scratch("fmu-cosim", "undelayed");
     fmus(&dir);
     let mut errors = Vec::new();
     for dt in [2e-3, 1e-3, 5e-4] {
@@ -183,7 +174,7 @@ fn sampled_data(dt: u64, end: u64, sense: (u64, u64), act: (u64, u64)) -> Vec<(f
 
 #[test]
 fn the_delayed_loop_matches_a_sampled_data_integration_of_the_delay_equation() {
-    let dir = scratch("delayed");
+    let dir = scratch("fmu-cosim", "delayed");
     fmus(&dir);
     let ms = 1_000_000u64;
     for (sense, act) in [((5, 5), (5, 5)), ((2, 7), (10, 3)), ((1, 0), (20, 20))] {
@@ -221,7 +212,7 @@ fn critical_delay() -> f64 {
 
 #[test]
 fn the_delayed_loop_loses_stability_where_the_characteristic_equation_says() {
-    let dir = scratch("stability");
+    let dir = scratch("fmu-cosim", "stability");
     fmus(&dir);
     let d = critical_delay();
     println!("critical loop delay {d:.4} s");
@@ -253,7 +244,7 @@ fn the_delayed_loop_loses_stability_where_the_characteristic_equation_says() {
 
 #[test]
 fn the_same_fmus_and_scenario_give_the_same_digest() {
-    let dir = scratch("digest");
+    let dir = scratch("fmu-cosim", "digest");
     fmus(&dir);
     let v = closed_loop(1e-3, 2.0, (5e-3, 5e-3), (5e-3, 5e-3));
     let (_, a, first) = run(&dir, &v, &["plant.x", "ctrl.u"]);
@@ -314,7 +305,7 @@ fn the_delayed_loop_converges_to_the_delay_differential_equation() {
     // one and a half steps (the controller's step, and the plant's hold of its input,
     // whose mean lies half a step later). Against the DDE with that delay the error
     // shrinks with dt.
-    let dir = scratch("dde");
+    let dir = scratch("fmu-cosim", "dde");
     fmus(&dir);
     let mut errors = Vec::new();
     for dt in [2e-3, 1e-3, 5e-4] {
@@ -376,7 +367,7 @@ fn a_controller_fmu_steers_a_body_of_the_multibody_model_over_the_network() {
         let wd = w * (1.0 - zeta * zeta).sqrt();
         (-zeta * w * t).exp() * (X0 * (wd * t).cos() + (zeta * w * X0 / wd) * (wd * t).sin())
     };
-    let dir = scratch("body");
+    let dir = scratch("fmu-cosim", "body");
     fmus(&dir);
     let mut errors = Vec::new();
     for dt in [2e-3, 1e-3, 5e-4] {
@@ -398,7 +389,7 @@ fn a_controller_fmu_steers_a_body_of_the_multibody_model_over_the_network() {
 
 #[test]
 fn a_loop_of_fmus_runs_over_a_tdma_network_with_the_same_digest_on_any_thread_count() {
-    let dir = scratch("tdma");
+    let dir = scratch("fmu-cosim", "tdma");
     fmus(&dir);
     let mut v = closed_loop(1e-3, 3.0, (5e-3, 0.0), (5e-3, 0.0));
     for c in v["channels"].as_array_mut().unwrap() {

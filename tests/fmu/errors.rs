@@ -2,23 +2,14 @@
 //! fails: a clear error naming the field, the FMU and the variable (exit 2, nothing
 //! written), or exit 3 naming the FMU, the function and the time.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 use serde_json::{json, Value};
 
-use crate::fmu_build::{build_test_fmu, fmus_dir, write_zip};
+use crate::fmus::scratch;
 
-fn scratch(name: &str) -> PathBuf {
-    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("target")
-        .join("test-scratch")
-        .join("fmu-errors")
-        .join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("scratch");
-    d
-}
+use crate::fmu_build::{build_test_fmu, fmus_dir, write_zip};
 
 /// A loop of msd (`plant`) and pd (`ctrl`) over one channel `c`.
 fn base() -> Value {
@@ -62,7 +53,7 @@ fn set(mut v: Value, pointer: &str, x: Value) -> Value {
 
 #[test]
 fn each_mistake_is_named_by_its_field_its_fmu_and_its_variable() {
-    let dir = scratch("validation");
+    let dir = scratch("fmu-errors", "validation");
     for id in ["msd", "pd", "faulty"] {
         build_test_fmu(id, &dir).unwrap();
     }
@@ -177,7 +168,7 @@ fn each_mistake_is_named_by_its_field_its_fmu_and_its_variable() {
 
 #[test]
 fn an_fmu_without_a_binary_for_this_platform_lists_the_ones_it_has() {
-    let dir = scratch("platform");
+    let dir = scratch("fmu-errors", "platform");
     build_test_fmu("pd", &dir).unwrap();
     let dll = dir.join("msd.dll");
     std::fs::write(&dll, b"MZ").unwrap();
@@ -205,7 +196,7 @@ fn dsmcosim(args: &[&str]) -> std::process::Output {
 
 #[test]
 fn on_the_command_line_a_bad_fmu_scene_exits_2_and_writes_nothing() {
-    let dir = scratch("cli-invalid");
+    let dir = scratch("fmu-errors", "cli-invalid");
     for id in ["msd", "pd"] {
         build_test_fmu(id, &dir).unwrap();
     }
@@ -230,7 +221,7 @@ fn on_the_command_line_a_bad_fmu_scene_exits_2_and_writes_nothing() {
 
 #[test]
 fn an_fmu_that_returns_an_error_stops_the_run_with_exit_3_naming_it() {
-    let dir = scratch("cli-status");
+    let dir = scratch("fmu-errors", "cli-status");
     for id in ["faulty", "pd"] {
         build_test_fmu(id, &dir).unwrap();
     }
@@ -262,7 +253,7 @@ fn an_fmu_that_returns_an_error_stops_the_run_with_exit_3_naming_it() {
 
 #[test]
 fn a_crash_inside_an_fmu_kills_the_run_by_its_signal_and_is_no_panic() {
-    let dir = scratch("cli-crash");
+    let dir = scratch("fmu-errors", "cli-crash");
     for id in ["faulty", "pd"] {
         build_test_fmu(id, &dir).unwrap();
     }

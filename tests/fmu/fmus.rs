@@ -52,3 +52,16 @@ pub fn rerun_self(test: &str, var: &str, value: &str) -> std::process::Output {
         .output()
         .expect("run the child")
 }
+
+/// A fresh directory `target/test-scratch/<group>/<name>` for a test's files (kept after
+/// the test, for a look at what a failing run wrote).
+pub fn scratch(group: &str, name: &str) -> std::path::PathBuf {
+    let d = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("target")
+        .join("test-scratch")
+        .join(group)
+        .join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("scratch");
+    d
+}

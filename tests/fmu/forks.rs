@@ -10,18 +10,9 @@ use dsmcosim::kernel::SimTime;
 use dsmcosim::run::{resume, run_with, RunOptions};
 use serde_json::{json, Value};
 
-use crate::fmu_build::build_test_fmu;
+use crate::fmus::scratch;
 
-fn scratch(name: &str) -> PathBuf {
-    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("target")
-        .join("test-scratch")
-        .join("fmu-forks")
-        .join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("scratch");
-    d
-}
+use crate::fmu_build::build_test_fmu;
 
 /// The PD loop of `cosim.rs` with `extra` keys merged in, written into `dir` beside
 /// msd.fmu and pd.fmu (or `plant` in their place), and loaded.
@@ -66,7 +57,7 @@ fn bits(w: &CoSim) -> Vec<u64> {
 
 #[test]
 fn a_fork_runs_on_bit_for_bit_and_leaves_its_source_alone() {
-    let dir = scratch("fork");
+    let dir = scratch("fmu-forks", "fork");
     let s = scene(&dir, "msd", json!({}));
     let at = |secs: f64| SimTime::from_secs_f64(secs).unwrap();
     let mut plain = CoSim::new(&s);
@@ -97,7 +88,7 @@ fn a_fork_runs_on_bit_for_bit_and_leaves_its_source_alone() {
 
 #[test]
 fn a_fork_of_an_fmu_that_cannot_save_its_state_fails_naming_it() {
-    let dir = scratch("unforkable");
+    let dir = scratch("fmu-forks", "unforkable");
     // `faulty` has the plant's x, v and F, but no state saving.
     let s = scene(&dir, "faulty", json!({}));
     let at = |secs: f64| SimTime::from_secs_f64(secs).unwrap();
@@ -113,7 +104,7 @@ fn a_fork_of_an_fmu_that_cannot_save_its_state_fails_naming_it() {
 
 #[test]
 fn a_run_resumed_from_any_checkpoint_ends_with_the_same_digest() {
-    let dir = scratch("checkpoint");
+    let dir = scratch("fmu-forks", "checkpoint");
     let s = scene(&dir, "msd", json!({}));
     let opts = RunOptions {
         checkpoint_every: SimTime::from_secs_f64(0.7),
@@ -141,7 +132,7 @@ fn a_run_resumed_from_any_checkpoint_ends_with_the_same_digest() {
 
 #[test]
 fn checkpoints_and_lookahead_are_refused_for_an_fmu_that_cannot_save_its_state() {
-    let dir = scratch("refusals");
+    let dir = scratch("fmu-forks", "refusals");
     let s = scene(&dir, "faulty", json!({}));
     let opts = RunOptions {
         checkpoint_every: SimTime::from_secs_f64(0.5),
@@ -177,7 +168,7 @@ fn checkpoints_and_lookahead_are_refused_for_an_fmu_that_cannot_save_its_state()
 
 #[test]
 fn the_controller_optimizes_the_periods_on_the_rms_of_an_fmu_output() {
-    let dir = scratch("controller");
+    let dir = scratch("fmu-forks", "controller");
     let s = scene(
         &dir,
         "msd",
@@ -223,4 +214,54 @@ fn the_controller_optimizes_the_periods_on_the_rms_of_an_fmu_output() {
         moved |= r[2].parse::<f64>().unwrap() != 0.005;
     }
     assert!(moved, "the DSM never left its initial periods");
+}
+
+#[test]
+fn online_measurement_needs_no_fork_and_runs_an_fmu_that_cannot_save_its_state() {
+    let dir = scratch("fmu-forks", "online");
+    let s = scene(
+        &dir,
+        "faulty",
+        json!({
+            "fmus": [
+                {"name": "plant", "path": "faulty.fmu", "node": 1, "start": {"fail_at": 100.0}},
+                {"name": "ctrl", "path": "pd.fmu", "node": 2}
+            ],
+            "measurement": {"period": 0.25, "signals": ["plant.x"]},
+            "controller": {"method": "dsm", "problem": "up", "penalty": 1e-4,
+                           "measure": "online", "tau_min": 0.001, "tau_max": 0.02,
+                           "initial": [0.005, 0.005], "dsm": {"size": 0.004}}
+        }),
+    );
+    let a = run_with(&s, &dir.join("a"), RunOptions::default()).expect("online run");
+    let b = run_with(&s, &dir.join("b"), RunOptions::default()).expect("online run");
+    assert_eq!(a.digest, b.digest);
+    let epochs = std::fs::read_to_string(dir.join("a/epochs.csv")).unwrap();
+    assert_eq!(epochs.lines().count(), 1 + 12, "{epochs}");
+}
+
+#[test]
+fn a_sweep_over_an_fmu_scene_reads_the_fmus_beside_its_base() {
+    let dir = scratch("fmu-forks", "sweep");
+    scene(&dir, "msd", json!({}));
+    let sweep = json!({
+        "name": "latency",
+        "base": "scenario.json",
+        "overrides": {"/duration": 0.5},
+        "axes": [{"name": "latency", "pointer": "/channels/0/latency",
+                  "values": [0.0, 0.01, 0.02]}]
+    });
+    std::fs::write(dir.join("sweep.json"), sweep.to_string()).unwrap();
+    // Run from elsewhere: the FMU paths are relative to the base, not the working
+    // directory.
+    let out = dir.join("out");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_dsmcosim"))
+        .current_dir(std::env::temp_dir())
+        .args(["sweep", dir.join("sweep.json").to_str().unwrap(), "--out"])
+        .arg(&out)
+        .output()
+        .expect("dsmcosim");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let table = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
+    assert_eq!(table.lines().count(), 4, "{table}");
 }

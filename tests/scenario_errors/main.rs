@@ -515,7 +515,7 @@ fn model_needs_exactly_one_form() {
     invalid(set("/model", json!({"links": []})), "model.links", "needs `bodies`");
     invalid(set("/model", json!({"grid": grid, "links": []})), "model", "not both");
     invalid(set("/model/bodies", json!([])), "model.bodies", "at least one body");
-    invalid(remove("/model"), "top level", "missing field `model`");
+    invalid(remove("/model"), "model", "or leave `model` out in a scene of `fmus` only");
 }
 
 #[test]
