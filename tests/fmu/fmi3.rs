@@ -99,7 +99,12 @@ fn an_fmi3_description_parses_with_its_token_capabilities_and_variables() {
     assert!(cs.can_get_and_set_fmu_state && cs.can_serialize_fmu_state);
     assert!(cs.can_handle_variable_communication_step_size);
     assert!(!cs.can_be_instantiated_only_once_per_process);
-    assert_eq!(d.variables.len(), 9);
+    assert_eq!(d.variables.len(), 10);
+    let time = d.variable("time").expect("time");
+    assert_eq!(
+        (time.value_reference, time.causality),
+        (9, Causality::Independent)
+    );
     let k = d.variable("k").expect("k");
     assert_eq!(
         (

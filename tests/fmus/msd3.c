@@ -43,7 +43,7 @@ typedef struct {
     bool logging;
 } Instance;
 
-enum { VR_M, VR_K, VR_C, VR_X0, VR_V0, VR_F, VR_X, VR_V, VR_A };
+enum { VR_M, VR_K, VR_C, VR_X0, VR_V0, VR_F, VR_X, VR_V, VR_A, VR_TIME };
 
 /* Largest internal RK4 step [s]. */
 #define MAX_SUBSTEP 1e-4
@@ -87,6 +87,7 @@ static fmi3Status get_float64(Instance *in, fmi3ValueReference vr, fmi3Float64 *
     case VR_X: *value = d->x; break;
     case VR_V: *value = d->v; break;
     case VR_A: *value = acceleration(d, d->x, d->v); break;
+    case VR_TIME: *value = d->time; break;
     default: return refuse(in, "unknown Float64 value reference");
     }
     return fmi3OK;
