@@ -1,14 +1,20 @@
-//! FMI 2.0 co-simulation FMUs: unpack, describe, load and drive them (issue 31).
+//! FMI 2.0 and FMI 3.0 co-simulation FMUs: unpack, describe, load and drive them
+//! (issue 31).
 //!
 //! An FMU (Functional Mock-up Unit) is a zip archive holding a model in the FMI standard's
 //! form: `modelDescription.xml` (the model's variables and capabilities), one compiled
 //! shared library per platform under `binaries/<platform>/`, and optional `resources/`.
 //! A co-simulation FMU brings its own solver: the importer sets inputs, calls
-//! `fmi2DoStep(t, h)` and reads outputs at the communication points.
+//! `fmi2DoStep(t, h)` (`fmi3DoStep`) and reads outputs at the communication points.
+//!
+//! Both versions are driven through the same [`Instance`] methods: [`Fmu::load`] reads
+//! `fmiVersion` and resolves the FMI 2.0 ([`fmi2`]) or FMI 3.0 ([`fmi3`]) functions, and
+//! each method calls its version's function.
 //!
 //! ```text
 //!   plant.fmu ─archive::unpack─▶ private 0700 temp dir ─description::ModelDescription::parse─▶
-//!   ─Fmu::load (dlopen binaries/linux64/<id>.so, resolve fmi2*)─▶ Fmu ─instantiate─▶ Instance
+//!   ─Fmu::load (dlopen binaries/linux64/<id>.so, resolve fmi2*;
+//!               FMI 3.0: binaries/x86_64-linux/<id>.so, resolve fmi3*)─▶ Fmu ─instantiate─▶ Instance
 //!
 //!   Instance: setup_experiment → enter/exit_initialization_mode
 //!             → { set_real/integer/boolean → do_step(t, h) → get_* } … → terminate
@@ -28,13 +34,17 @@
 //! # Errors
 //!
 //! Every failure is an [`FmuError`]; every FMI call's status is checked, and `fmi2Discard`,
-//! `fmi2Error`, `fmi2Fatal` and `fmi2Pending` become [`FmuError::Status`]. What this
-//! loader supports: FMI 2.0, co-simulation, on the platforms FMI 2.0 names
-//! (`linux64`, `linux32`, `darwin64`, `win64`, `win32`).
+//! `fmi2Error`, `fmi2Fatal` and `fmi2Pending` (FMI 3.0: `fmi3Discard`, `fmi3Error`,
+//! `fmi3Fatal`) become [`FmuError::Status`]. What this loader supports: FMI 2.0 and 3.0,
+//! co-simulation, on the platforms FMI 2.0 names (`linux64`, `linux32`, `darwin64`,
+//! `win64`, `win32`) and the FMI 3.0 platform tuples of [`fmi3::PLATFORMS`]
+//! (`x86_64-linux`, `aarch64-linux`, `x86_64-darwin`, `aarch64-darwin`,
+//! `x86_64-windows`).
 
 pub mod archive;
 pub mod description;
 pub mod fmi2;
+pub mod fmi3;
 pub mod instance;
 pub mod loaded;
 
@@ -106,8 +116,8 @@ pub enum FmuError {
     },
     /// The FMU is of an FMI version this loader does not read.
     #[error(
-        "fmiVersion '{version}': FMI {version} is not supported yet by this loader \
-         (it reads FMI 2.0 co-simulation FMUs)"
+        "fmiVersion '{version}': FMI {version} is not supported by this loader \
+         (it reads FMI 2.0 and FMI 3.0 co-simulation FMUs)"
     )]
     UnsupportedVersion {
         /// The `fmiVersion` attribute.
@@ -129,7 +139,8 @@ pub enum FmuError {
     NoBinary {
         /// The FMU's name in the scenario.
         fmu: String,
-        /// The platform folder and file wanted (`binaries/linux64/msd.so`).
+        /// The platform folder and file wanted (`binaries/linux64/msd.so`,
+        /// `binaries/x86_64-linux/msd3.so`).
         wanted: String,
         /// The subdirectories of `binaries/` the FMU has, sorted.
         available: Vec<String>,
@@ -149,22 +160,24 @@ pub enum FmuError {
     MissingSymbol {
         /// The FMU's name in the scenario.
         fmu: String,
-        /// The C function name (`fmi2DoStep`).
+        /// The C function name (`fmi2DoStep`, `fmi3DoStep`).
         symbol: &'static str,
     },
-    /// The binary reports another FMI version or types platform than FMI 2.0's.
+    /// The binary reports another FMI version (or FMI 2.0 types platform) than its
+    /// description's.
     #[error("FMU '{fmu}': {function} returned '{value}', expected '{expected}'")]
     BinaryMismatch {
         /// The FMU's name in the scenario.
         fmu: String,
-        /// `fmi2GetVersion` or `fmi2GetTypesPlatform`.
+        /// `fmi2GetVersion`, `fmi2GetTypesPlatform` or `fmi3GetVersion`.
         function: &'static str,
         /// What it returned.
         value: String,
-        /// What FMI 2.0 requires.
+        /// What the standard requires.
         expected: &'static str,
     },
-    /// An FMI call returned `fmi2Discard`, `fmi2Error`, `fmi2Fatal` or `fmi2Pending`.
+    /// An FMI call returned `fmi2Discard`, `fmi2Error`, `fmi2Fatal` or `fmi2Pending`
+    /// (FMI 3.0: `fmi3Discard`, `fmi3Error` or `fmi3Fatal`).
     #[error(
         "FMU '{fmu}': {function} returned {status}{}",
         time.map(|t| format!(" at t = {t} s")).unwrap_or_default()
@@ -176,16 +189,45 @@ pub enum FmuError {
         function: &'static str,
         /// The simulated time of the call [s], where one applies.
         time: Option<f64>,
-        /// The status returned (`fmi2Error`).
+        /// The status returned (`fmi2Error`, `fmi3Error`).
         status: &'static str,
     },
-    /// An earlier call returned `fmi2Fatal`: FMI 2.0 allows no further call.
-    #[error("FMU '{fmu}': {function} not called: an earlier call returned fmi2Fatal")]
+    /// An FMI 3.0 step returned OK but cannot be taken as done: the FMU set
+    /// `terminateSimulation`, or returned early although early return was not allowed.
+    #[error("FMU '{fmu}': {function} at t = {time} s: {reason}")]
+    StepEnded {
+        /// The FMU instance's name.
+        fmu: String,
+        /// The FMI function (`fmi3DoStep`).
+        function: &'static str,
+        /// The communication point the step started from [s].
+        time: f64,
+        /// What the FMU reported.
+        reason: String,
+    },
+    /// An earlier call returned `fmi2Fatal` (`fmi3Fatal`): the standard allows no further
+    /// call.
+    #[error("FMU '{fmu}': {function} not called: an earlier call returned {status}")]
     Unusable {
         /// The FMU instance's name.
         fmu: String,
         /// The FMI function refused.
         function: &'static str,
+        /// The fatal status's C name (`fmi2Fatal`, `fmi3Fatal`).
+        status: &'static str,
+    },
+    /// An FMI 3.0 enumeration's value (an `Int64` at the ABI) does not fit the `i32` of
+    /// [`Instance::get_integer`].
+    #[error("FMU '{fmu}': {function} gave {value} for value reference {value_reference}, outside the 32-bit integers")]
+    OutOfRange {
+        /// The FMU instance's name.
+        fmu: String,
+        /// The FMI function (`fmi3GetInt64`).
+        function: &'static str,
+        /// The variable's value reference.
+        value_reference: u32,
+        /// The value read.
+        value: i64,
     },
     /// The FMU's description does not declare a capability the call needs; the FMU was
     /// not called.
@@ -193,20 +235,24 @@ pub enum FmuError {
     CapabilityMissing {
         /// The FMU's name.
         fmu: String,
-        /// The capability flag (`canGetAndSetFMUstate`, `canSerializeFMUstate`).
+        /// The capability flag (`canGetAndSetFMUstate`, `canSerializeFMUstate`; in FMI 3.0
+        /// `canGetAndSetFMUState`, `canSerializeFMUState`).
         capability: &'static str,
         /// The FMI function that was not called.
         function: &'static str,
     },
-    /// `fmi2Instantiate` returned a null component.
-    #[error("FMU '{fmu}': fmi2Instantiate returned null for instance '{instance}'")]
+    /// `fmi2Instantiate` (`fmi3InstantiateCoSimulation`) returned a null instance.
+    #[error("FMU '{fmu}': {function} returned null for instance '{instance}'")]
     NullInstance {
         /// The FMU's name.
         fmu: String,
+        /// `fmi2Instantiate` or `fmi3InstantiateCoSimulation`.
+        function: &'static str,
         /// The instance name passed.
         instance: String,
     },
-    /// `fmi2GetFMUstate` or `fmi2DeSerializeFMUstate` returned success and a null state.
+    /// `fmi2GetFMUstate` or `fmi2DeSerializeFMUstate` (or their FMI 3.0 counterparts)
+    /// returned success and a null state.
     #[error("FMU '{fmu}': {function} returned a null FMU state")]
     NullState {
         /// The FMU's name.

@@ -7,7 +7,10 @@
 //! `fmi2DoStep(t, h)`, the outputs read. Outputs of a step that ends at `t + h` become
 //! visible to channels and the trace only when the lock-step reaches `t + h`, so no
 //! one ever sees an FMU's future; an input delivered between two communication points
-//! is held until the next (zero-order hold, the co-simulation's convention).
+//! is held until the next (zero-order hold, the co-simulation's convention). The calls
+//! are named here as FMI 2.0 names them; an FMI 3.0 FMU gets its version's calls through
+//! the same [`Instance`] methods (`fmi3EnterInitializationMode` with the start time,
+//! `fmi3DoStep`, …), so nothing here depends on the version.
 //!
 //! A fork (`Clone`) or a checkpoint carries the FMU's state as bytes
 //! (`fmi2SerializeFMUstate`); the fork instantiates its own instance on its first event

@@ -1,8 +1,25 @@
-//! `modelDescription.xml` of an FMI 2.0 FMU: the parts a co-simulation importer uses.
+//! `modelDescription.xml` of an FMI 2.0 or FMI 3.0 FMU: the parts a co-simulation
+//! importer uses.
 //!
 //! Only what dsmcosim needs is read: the header, the `<CoSimulation>` capabilities, the
-//! default step and the scalar variables. Defaults are those of the FMI 2.0 standard
-//! (causality `local`, variability `continuous`, capability flags `false`).
+//! default step and the variables. Defaults are those of the standard (causality
+//! `local`, capability flags `false`; variability `continuous`, except for FMI 3.0
+//! variables of a type other than Float32 and Float64, whose default is `discrete`).
+//!
+//! The two versions differ in form, not in what is read here:
+//!
+//! | | FMI 2.0 | FMI 3.0 |
+//! |---|---|---|
+//! | token checked by the binary | `guid` | `instantiationToken` |
+//! | state capabilities | `canGetAndSetFMUstate`, `canSerializeFMUstate` | `canGetAndSetFMUState`, `canSerializeFMUState` |
+//! | a variable | `<ScalarVariable …><Real start/></ScalarVariable>` | `<Float64 … start/>` |
+//!
+//! FMI 3.0 types map onto [`VarKind`]: Float64 → `Real`, Int32 → `Integer`, Boolean →
+//! `Boolean`, String → `String`, Enumeration → `Enumeration` (an `Int64` at FMI 3.0's
+//! ABI; [`super::Instance`] passes it so); every other type (Float32, Int8 … UInt64,
+//! Binary, Clock) reads as [`VarKind::Other`] and a variable with `<Dimension>` children
+//! as [`VarKind::Array`]. They load; using one (a connection, a start value) is refused
+//! where it is named.
 
 use roxmltree::{Document, Node};
 
@@ -11,18 +28,20 @@ use super::FmuError;
 /// What an FMU says about itself.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ModelDescription {
-    /// `fmiVersion`: always `"2.0"` here (other versions are refused while parsing).
+    /// `fmiVersion`: `"2.0"`, or `"3.0"` (or `"3.0.x"`); other versions are refused while
+    /// parsing.
     pub fmi_version: String,
     /// `modelName`.
     pub model_name: String,
-    /// `guid`: passed back to `fmi2Instantiate`, which checks it against its own.
+    /// `guid` (FMI 2.0) or `instantiationToken` (FMI 3.0): passed back to
+    /// `fmi2Instantiate` or `fmi3InstantiateCoSimulation`, which check it against their own.
     pub guid: String,
     /// `generationTool`, if given.
     pub generation_tool: Option<String>,
     /// The `<CoSimulation>` element; `None` for a model-exchange-only FMU, which
     /// [`super::Fmu::load`] refuses.
     pub co_simulation: Option<CoSimulation>,
-    /// `<ModelVariables>`, in file order (FMI's 1-based variable index is position + 1).
+    /// `<ModelVariables>`, in file order (FMI 2.0's 1-based variable index is position + 1).
     pub variables: Vec<ScalarVariable>,
     /// `<DefaultExperiment stepSize>` [s], if given.
     pub default_experiment_step: Option<f64>,
@@ -33,9 +52,11 @@ pub struct ModelDescription {
 pub struct CoSimulation {
     /// `modelIdentifier`: the binary's file stem and the prefix-free symbol names' model.
     pub model_identifier: String,
-    /// `canGetAndSetFMUstate` (default false): `fmi2GetFMUstate`/`fmi2SetFMUstate` work.
+    /// `canGetAndSetFMUstate` (FMI 2.0) or `canGetAndSetFMUState` (FMI 3.0), default
+    /// false: states can be saved and restored.
     pub can_get_and_set_fmu_state: bool,
-    /// `canSerializeFMUstate` (default false): states can be turned into bytes and back.
+    /// `canSerializeFMUstate` (FMI 2.0) or `canSerializeFMUState` (FMI 3.0), default
+    /// false: states can be turned into bytes and back.
     pub can_serialize_fmu_state: bool,
     /// `canHandleVariableCommunicationStepSize` (default false).
     pub can_handle_variable_communication_step_size: bool,
@@ -43,21 +64,22 @@ pub struct CoSimulation {
     pub can_be_instantiated_only_once_per_process: bool,
 }
 
-/// One `<ScalarVariable>`.
+/// One variable: an FMI 2.0 `<ScalarVariable>` or an FMI 3.0 type element (`<Float64>`, …).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ScalarVariable {
     /// `name`.
     pub name: String,
-    /// `valueReference`: the handle passed to `fmi2Get*`/`fmi2Set*`.
+    /// `valueReference`: the handle passed to `fmi2Get*`/`fmi2Set*` or `fmi3Get*`/`fmi3Set*`.
     pub value_reference: u32,
     /// `causality` (default `local`).
     pub causality: Causality,
     /// `variability` (default `continuous`).
     pub variability: Variability,
-    /// The type element's name (`<Real>`, `<Integer>`, …).
+    /// The type (`<Real>`, `<Integer>`, … in FMI 2.0; `<Float64>`, `<Int32>`, … in FMI 3.0).
     pub kind: VarKind,
-    /// The type element's `start`, as a number: Real and Integer as written, Boolean as
-    /// 0 or 1, Enumeration as its integer; `None` when absent and for String.
+    /// `start`, as a number: Real and Integer as written, Boolean as 0 or 1, Enumeration
+    /// as its integer; `None` when absent and for String, [`VarKind::Other`] and
+    /// [`VarKind::Array`].
     pub start: Option<f64>,
 }
 
@@ -76,6 +98,9 @@ pub enum Causality {
     Local,
     /// `independent`: the time variable.
     Independent,
+    /// `structuralParameter` (FMI 3.0): set only in configuration mode, which dsmcosim
+    /// does not enter.
+    StructuralParameter,
 }
 
 /// `variability` of a variable.
@@ -93,20 +118,63 @@ pub enum Variability {
     Continuous,
 }
 
-/// The variable's type element.
+/// The variable's type.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum VarKind {
-    /// `<Real>`: `fmi2Real` (double).
+    /// `<Real>` (`fmi2Real`) or `<Float64>` (`fmi3Float64`): a double.
     Real,
-    /// `<Integer>`: `fmi2Integer` (int).
+    /// `<Integer>` (`fmi2Integer`, an int) or `<Int32>` (`fmi3Int32`).
     Integer,
-    /// `<Boolean>`: `fmi2Boolean` (int, 0 or 1).
+    /// `<Boolean>`: `fmi2Boolean` (int, 0 or 1) or `fmi3Boolean` (C `bool`).
     Boolean,
     /// `<String>`.
     String,
-    /// `<Enumeration>`: an integer at the ABI.
+    /// `<Enumeration>`: an integer at the ABI (`int` in FMI 2.0, `Int64` in FMI 3.0).
     Enumeration,
+    /// An FMI 3.0 type this importer does not exchange, by its element name (`Float32`,
+    /// `Int8`, `UInt8`, `Int16`, `UInt16`, `UInt32`, `Int64`, `UInt64`, `Binary`,
+    /// `Clock`).
+    Other(&'static str),
+    /// An FMI 3.0 array variable (it has `<Dimension>` children), by its element type's
+    /// name (`Float64`): not exchanged.
+    Array(&'static str),
 }
+
+impl std::fmt::Display for VarKind {
+    /// `Real`, `Integer`, …; an unexchanged FMI 3.0 type by its name (`Float32`), an
+    /// array as `Float64 array`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            VarKind::Real => f.write_str("Real"),
+            VarKind::Integer => f.write_str("Integer"),
+            VarKind::Boolean => f.write_str("Boolean"),
+            VarKind::String => f.write_str("String"),
+            VarKind::Enumeration => f.write_str("Enumeration"),
+            VarKind::Other(name) => f.write_str(name),
+            VarKind::Array(name) => write!(f, "{name} array"),
+        }
+    }
+}
+
+/// The FMI 3.0 variable elements, each with what it reads as. Names are `'static` so that
+/// [`VarKind`] stays `Copy`.
+const FMI3_TYPES: [(&str, VarKind); 15] = [
+    ("Float64", VarKind::Real),
+    ("Int32", VarKind::Integer),
+    ("Boolean", VarKind::Boolean),
+    ("String", VarKind::String),
+    ("Enumeration", VarKind::Enumeration),
+    ("Float32", VarKind::Other("Float32")),
+    ("Int8", VarKind::Other("Int8")),
+    ("UInt8", VarKind::Other("UInt8")),
+    ("Int16", VarKind::Other("Int16")),
+    ("UInt16", VarKind::Other("UInt16")),
+    ("UInt32", VarKind::Other("UInt32")),
+    ("Int64", VarKind::Other("Int64")),
+    ("UInt64", VarKind::Other("UInt64")),
+    ("Binary", VarKind::Other("Binary")),
+    ("Clock", VarKind::Other("Clock")),
+];
 
 impl ModelDescription {
     /// Parses the text of a `modelDescription.xml`. Errors name `modelDescription.xml`
@@ -121,17 +189,24 @@ impl ModelDescription {
             ));
         }
         let fmi_version = required(root, "fmiVersion")?.to_string();
-        if fmi_version != "2.0" {
+        let fmi3 = is_fmi3(&fmi_version);
+        if fmi_version != "2.0" && !fmi3 {
             return Err(FmuError::UnsupportedVersion {
                 version: fmi_version,
             });
         }
+        // FMI 3.0 writes "FMUState" where FMI 2.0 wrote "FMUstate".
+        let (get_set, serialize) = if fmi3 {
+            ("canGetAndSetFMUState", "canSerializeFMUState")
+        } else {
+            ("canGetAndSetFMUstate", "canSerializeFMUstate")
+        };
         let co_simulation = match child(root, "CoSimulation") {
             None => None,
             Some(cs) => Some(CoSimulation {
                 model_identifier: required(cs, "modelIdentifier")?.to_string(),
-                can_get_and_set_fmu_state: flag(cs, "canGetAndSetFMUstate")?,
-                can_serialize_fmu_state: flag(cs, "canSerializeFMUstate")?,
+                can_get_and_set_fmu_state: flag(cs, get_set)?,
+                can_serialize_fmu_state: flag(cs, serialize)?,
                 can_handle_variable_communication_step_size: flag(
                     cs,
                     "canHandleVariableCommunicationStepSize",
@@ -148,6 +223,12 @@ impl ModelDescription {
         };
         let variables = match child(root, "ModelVariables") {
             None => Vec::new(),
+            Some(mv) if fmi3 => mv
+                .children()
+                .filter(|n| n.is_element())
+                .enumerate()
+                .map(|(i, n)| variable3(i, n))
+                .collect::<Result<_, _>>()?,
             Some(mv) => mv
                 .children()
                 .filter(|n| n.has_tag_name("ScalarVariable"))
@@ -155,10 +236,11 @@ impl ModelDescription {
                 .map(|(i, n)| variable(i, n))
                 .collect::<Result<_, _>>()?,
         };
+        let token = if fmi3 { "instantiationToken" } else { "guid" };
         Ok(ModelDescription {
             fmi_version,
             model_name: required(root, "modelName")?.to_string(),
-            guid: required(root, "guid")?.to_string(),
+            guid: required(root, token)?.to_string(),
             generation_tool: root.attribute("generationTool").map(str::to_string),
             co_simulation,
             variables,
@@ -170,6 +252,16 @@ impl ModelDescription {
     pub fn variable(&self, name: &str) -> Option<&ScalarVariable> {
         self.variables.iter().find(|v| v.name == name)
     }
+
+    /// Whether this is an FMI 3.0 description (`fmiVersion` `3.0` or `3.0.x`).
+    pub fn is_fmi3(&self) -> bool {
+        is_fmi3(&self.fmi_version)
+    }
+}
+
+/// `3.0` and its maintenance releases (`3.0.1`); FMPy reads the same set.
+fn is_fmi3(version: &str) -> bool {
+    version == "3.0" || version.starts_with("3.0.")
 }
 
 /// Reads the `index`-th (0-based) `<ScalarVariable>`.
@@ -189,23 +281,8 @@ fn variable(index: usize, n: Node) -> Result<ScalarVariable, FmuError> {
             format!("'{vr}' is not a 32-bit unsigned integer"),
         )
     })?;
-    let causality = match n.attribute("causality").unwrap_or("local") {
-        "parameter" => Causality::Parameter,
-        "calculatedParameter" => Causality::CalculatedParameter,
-        "input" => Causality::Input,
-        "output" => Causality::Output,
-        "local" => Causality::Local,
-        "independent" => Causality::Independent,
-        other => return Err(bad(&at("causality"), format!("unknown value '{other}'"))),
-    };
-    let variability = match n.attribute("variability").unwrap_or("continuous") {
-        "constant" => Variability::Constant,
-        "fixed" => Variability::Fixed,
-        "tunable" => Variability::Tunable,
-        "discrete" => Variability::Discrete,
-        "continuous" => Variability::Continuous,
-        other => return Err(bad(&at("variability"), format!("unknown value '{other}'"))),
-    };
+    let causality = causality(n, &at("causality"), false)?;
+    let variability = variability(n, &at("variability"), "continuous")?;
     let ty = n.children().find(|c| c.is_element()).ok_or_else(|| {
         bad(
             &at("type"),
@@ -221,25 +298,7 @@ fn variable(index: usize, n: Node) -> Result<ScalarVariable, FmuError> {
         other => return Err(bad(&at("type"), format!("unknown type element <{other}>"))),
     };
     let field = format!("ScalarVariable '{name}'/{}@start", ty.tag_name().name());
-    let start = match (kind, ty.attribute("start")) {
-        (_, None) | (VarKind::String, _) => None,
-        (VarKind::Boolean, Some(s)) => Some(match s.trim() {
-            "true" | "1" => 1.0,
-            "false" | "0" => 0.0,
-            _ => return Err(bad(&field, format!("'{s}' is not a boolean"))),
-        }),
-        (VarKind::Real, Some(s)) => Some(
-            s.trim()
-                .parse::<f64>()
-                .map_err(|_| bad(&field, format!("'{s}' is not a number")))?,
-        ),
-        (_, Some(s)) => Some(
-            s.trim()
-                .parse::<i32>()
-                .map_err(|_| bad(&field, format!("'{s}' is not a 32-bit integer")))?
-                .into(),
-        ),
-    };
+    let start = start(kind, ty.attribute("start"), &field)?;
     Ok(ScalarVariable {
         name,
         value_reference,
@@ -247,6 +306,103 @@ fn variable(index: usize, n: Node) -> Result<ScalarVariable, FmuError> {
         variability,
         kind,
         start,
+    })
+}
+
+/// Reads the `index`-th (0-based) variable element of an FMI 3.0 `<ModelVariables>`.
+fn variable3(index: usize, n: Node) -> Result<ScalarVariable, FmuError> {
+    let element = n.tag_name().name();
+    let at = |attr: &str| format!("ModelVariables/{element}[{}]@{attr}", index + 1);
+    let Some(&(type_name, kind)) = FMI3_TYPES.iter().find(|(t, _)| *t == element) else {
+        return Err(bad(
+            &format!("ModelVariables/{element}[{}]", index + 1),
+            format!("unknown variable element <{element}>"),
+        ));
+    };
+    let name = n
+        .attribute("name")
+        .ok_or_else(|| bad(&at("name"), "missing".into()))?
+        .to_string();
+    let at = |attr: &str| format!("{element} '{name}'@{attr}");
+    let vr = n
+        .attribute("valueReference")
+        .ok_or_else(|| bad(&at("valueReference"), "missing".into()))?;
+    let value_reference = vr.trim().parse::<u32>().map_err(|_| {
+        bad(
+            &at("valueReference"),
+            format!("'{vr}' is not a 32-bit unsigned integer"),
+        )
+    })?;
+    let causality = causality(n, &at("causality"), true)?;
+    let default = if matches!(type_name, "Float64" | "Float32") {
+        "continuous"
+    } else {
+        "discrete"
+    };
+    let variability = variability(n, &at("variability"), default)?;
+    let kind = if n.children().any(|c| c.has_tag_name("Dimension")) {
+        VarKind::Array(type_name)
+    } else {
+        kind
+    };
+    let start = start(kind, n.attribute("start"), &at("start"))?;
+    Ok(ScalarVariable {
+        name,
+        value_reference,
+        causality,
+        variability,
+        kind,
+        start,
+    })
+}
+
+/// The `causality` attribute of `n` (`field` names it in errors); `structuralParameter`
+/// only where `fmi3`.
+fn causality(n: Node, field: &str, fmi3: bool) -> Result<Causality, FmuError> {
+    Ok(match n.attribute("causality").unwrap_or("local") {
+        "parameter" => Causality::Parameter,
+        "calculatedParameter" => Causality::CalculatedParameter,
+        "input" => Causality::Input,
+        "output" => Causality::Output,
+        "local" => Causality::Local,
+        "independent" => Causality::Independent,
+        "structuralParameter" if fmi3 => Causality::StructuralParameter,
+        other => return Err(bad(field, format!("unknown value '{other}'"))),
+    })
+}
+
+/// The `variability` attribute of `n`, `default` when absent.
+fn variability(n: Node, field: &str, default: &str) -> Result<Variability, FmuError> {
+    Ok(match n.attribute("variability").unwrap_or(default) {
+        "constant" => Variability::Constant,
+        "fixed" => Variability::Fixed,
+        "tunable" => Variability::Tunable,
+        "discrete" => Variability::Discrete,
+        "continuous" => Variability::Continuous,
+        other => return Err(bad(field, format!("unknown value '{other}'"))),
+    })
+}
+
+/// A `start` attribute as a number for `kind` (see [`ScalarVariable::start`]).
+fn start(kind: VarKind, text: Option<&str>, field: &str) -> Result<Option<f64>, FmuError> {
+    Ok(match (kind, text) {
+        (_, None) | (VarKind::String | VarKind::Other(_) | VarKind::Array(_), _) => None,
+        (VarKind::Boolean, Some(s)) => Some(match s.trim() {
+            "true" | "1" => 1.0,
+            "false" | "0" => 0.0,
+            _ => return Err(bad(field, format!("'{s}' is not a boolean"))),
+        }),
+        (VarKind::Real, Some(s)) => Some(
+            s.trim()
+                .parse::<f64>()
+                .map_err(|_| bad(field, format!("'{s}' is not a number")))?,
+        ),
+        (VarKind::Integer | VarKind::Enumeration, Some(s)) => Some(
+            s.trim()
+                .parse::<i32>()
+                .map_err(|_| bad(field, format!("'{s}' is not a 32-bit integer")))?
+                .into(),
+        ),
     })
 }
 

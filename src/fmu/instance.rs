@@ -1,24 +1,33 @@
 //! A co-simulation instance of a loaded FMU and its saved states.
 //!
-//! Call sequence (FMI 2.0 co-simulation):
+//! Call sequence (co-simulation, the same for FMI 2.0 and FMI 3.0):
 //!
 //! ```text
 //!   Fmu::instantiate ─▶ set_* (parameters, start values)
 //!   setup_experiment(t0, stop) ─▶ enter_initialization_mode ─▶ set_*/get_* ─▶ exit_initialization_mode
 //!   repeat: set_* (inputs) ─▶ do_step(t, h) ─▶ get_* (outputs)      t ← t + h
 //!           get_state / set_state where canGetAndSetFMUstate, serialize where canSerializeFMUstate
-//!   terminate ─▶ drop (fmi2FreeInstance)
+//!   terminate ─▶ drop (fmi2FreeInstance / fmi3FreeInstance)
 //! ```
 //!
+//! Each method calls the function of the FMU's version: `set_real` is `fmi2SetReal` or
+//! `fmi3SetFloat64`, and so on. FMI 3.0 has no `fmi2SetupExperiment`: there
+//! [`Instance::setup_experiment`] only remembers the start and stop times, which
+//! [`Instance::enter_initialization_mode`] passes to `fmi3EnterInitializationMode`. An
+//! FMI 3.0 instance is made without event mode and without early return, so after
+//! initialization it is in step mode, as an FMI 2.0 one is.
+//!
 //! Every call is made under the instance's mutex, checks the status returned, and after
-//! an `fmi2Fatal` no further call (not even `fmi2FreeInstance`) reaches the FMU.
+//! an `fmi2Fatal` or `fmi3Fatal` no further call (not even the free) reaches the FMU.
 
 use std::ffi::{c_char, CString};
 use std::sync::atomic::Ordering;
 use std::sync::{Arc, Mutex, MutexGuard};
 
-use super::fmi2::{self, CallbackFunctions, Component, Functions, LogTarget, Status};
-use super::loaded::Loaded;
+use super::description::VarKind;
+use super::fmi2::{self, CallbackFunctions, Component, LogTarget, Status};
+use super::fmi3;
+use super::loaded::{Api, Loaded};
 use super::FmuError;
 
 /// Largest serialized state accepted from an FMU [bytes]: 1 GiB, so a corrupt size
@@ -33,7 +42,8 @@ struct Core {
     logging: bool,
     inner: Mutex<Inner>,
     /// `Box::into_raw` of the callback table given to `fmi2Instantiate` (the FMU may
-    /// keep the pointer) and of the logger's target; freed after `fmi2FreeInstance`.
+    /// keep the pointer; null for FMI 3.0, which has none) and of the logger's target
+    /// (the instance environment of both versions); freed after the instance is.
     callbacks: *mut CallbackFunctions,
     log: *mut LogTarget,
 }
@@ -45,6 +55,9 @@ struct Inner {
     fatal: bool,
     /// The last communication point reached [s] (for messages).
     time: Option<f64>,
+    /// FMI 3.0: the start time [s] and stop time [s] given to `setup_experiment`, for
+    /// `fmi3EnterInitializationMode` (start 0, no stop, until then).
+    experiment: (f64, Option<f64>),
 }
 
 // SAFETY: every use of the component goes through `inner`'s mutex, so the FMU is never
@@ -61,20 +74,25 @@ impl Drop for Core {
         let inner = self.inner.get_mut().unwrap_or_else(|e| e.into_inner());
         if !inner.fatal {
             // SAFETY: the component is live (states are gone: each holds this Core).
-            unsafe { (self.shared.fns.free_instance)(inner.component) };
+            match self.shared.api {
+                Api::Fmi2(f) => unsafe { (f.free_instance)(inner.component) },
+                Api::Fmi3(f) => unsafe { (f.free_instance)(inner.component) },
+            }
         }
         // SAFETY: made by `Box::into_raw` in `Instance::new`, freed once here, after the
-        // FMU has let go of them (or, after fmi2Fatal, is never called again).
+        // FMU has let go of them (or, after a fatal status, is never called again).
         unsafe {
-            drop(Box::from_raw(self.callbacks));
+            if !self.callbacks.is_null() {
+                drop(Box::from_raw(self.callbacks));
+            }
             drop(Box::from_raw(self.log));
         }
         self.shared.instances.fetch_sub(1, Ordering::SeqCst);
     }
 }
 
-/// One co-simulation instance of an [`super::Fmu`]. Freed (`fmi2FreeInstance`) when it and
-/// every [`FmuState`] made from it are dropped.
+/// One co-simulation instance of an [`super::Fmu`]. Freed (`fmi2FreeInstance` or
+/// `fmi3FreeInstance`) when it and every [`FmuState`] made from it are dropped.
 pub struct Instance {
     core: Arc<Core>,
 }
@@ -88,8 +106,9 @@ impl std::fmt::Debug for Instance {
     }
 }
 
-/// A saved FMU state (`fmi2FMUstate`) of one instance; freed with `fmi2FreeFMUstate` on
-/// drop. It keeps its instance alive, so dropping the [`Instance`] first is fine.
+/// A saved FMU state (`fmi2FMUstate`, `fmi3FMUState`) of one instance; freed with
+/// `fmi2FreeFMUstate` or `fmi3FreeFMUState` on drop. It keeps its instance alive, so
+/// dropping the [`Instance`] first is fine.
 pub struct FmuState {
     state: fmi2::State,
     core: Arc<Core>,
@@ -115,8 +134,13 @@ impl Drop for FmuState {
         if inner.fatal || self.state.is_null() {
             return;
         }
-        // Every state is made under canGetAndSetFMUstate, so `free` is resolved.
-        if let Some((_, _, free)) = self.core.shared.fns.state {
+        // Every state is made under canGetAndSetFMUstate, so `free` is resolved. The two
+        // versions' free functions have the same C type.
+        let free = match self.core.shared.api {
+            Api::Fmi2(f) => f.state.map(|(_, _, free)| free),
+            Api::Fmi3(f) => f.state.map(|(_, _, free)| free),
+        };
+        if let Some(free) = free {
             // SAFETY: the state came from this component and is freed once.
             unsafe { free(inner.component, &mut self.state) };
         }
@@ -128,23 +152,39 @@ impl Core {
         self.inner.lock().unwrap_or_else(|e| e.into_inner())
     }
 
+    fn fmi3(&self) -> bool {
+        matches!(self.shared.api, Api::Fmi3(_))
+    }
+
+    /// The C name of `status` in the FMU's version (`fmi2Error`, `fmi3Error`).
+    fn status_name(&self, status: Status) -> &'static str {
+        if self.fmi3() {
+            fmi3::status_name(status)
+        } else {
+            fmi2::status_name(status)
+        }
+    }
+
     /// Makes one FMI call under the mutex and checks its status; `time` is the time the
     /// message names (`None`: the last communication point). On success the lock is
     /// handed back, so a caller can record what the call changed (the time) atomically.
+    /// The status codes OK, Warning, Discard, Error and Fatal are the same numbers in
+    /// FMI 2.0 and 3.0; `fmi2Pending` (5) has no FMI 3.0 counterpart and is an error.
     fn call(
         &self,
         function: &'static str,
         time: Option<f64>,
-        f: impl FnOnce(Component, &Functions) -> Status,
+        f: impl FnOnce(Component) -> Status,
     ) -> Result<MutexGuard<'_, Inner>, FmuError> {
         let mut inner = self.lock();
         if inner.fatal {
             return Err(FmuError::Unusable {
                 fmu: self.shared.name.clone(),
                 function,
+                status: self.status_name(fmi2::FATAL),
             });
         }
-        let status = f(inner.component, &self.shared.fns);
+        let status = f(inner.component);
         let time = time.or(inner.time);
         match status {
             fmi2::OK => Ok(inner),
@@ -153,8 +193,9 @@ impl Core {
                     use std::io::Write;
                     let _ = writeln!(
                         std::io::stderr(),
-                        "[{}] {function} returned fmi2Warning",
-                        self.name
+                        "[{}] {function} returned {}",
+                        self.name,
+                        self.status_name(status)
                     );
                 }
                 Ok(inner)
@@ -167,7 +208,7 @@ impl Core {
                     fmu: self.shared.name.clone(),
                     function,
                     time,
-                    status: fmi2::status_name(other),
+                    status: self.status_name(other),
                 })
             }
         }
@@ -175,8 +216,10 @@ impl Core {
 }
 
 impl Instance {
-    /// `fmi2Instantiate` for co-simulation, not visible, with the FMU's GUID and resource
-    /// URI. The caller has counted the instance in `shared.instances`.
+    /// Instantiates for co-simulation, not visible: `fmi2Instantiate` with the FMU's GUID
+    /// and resource URI, or `fmi3InstantiateCoSimulation` with its instantiation token
+    /// and resource path, without event mode, early return or intermediate updates. The
+    /// caller has counted the instance in `shared.instances`.
     pub(crate) fn new(
         shared: Arc<Loaded>,
         instance_name: &str,
@@ -205,29 +248,64 @@ impl Instance {
             instance: instance_name.to_string(),
             on: logging,
         }));
-        let callbacks = Box::into_raw(Box::new(fmi2::callbacks(log)));
-        // SAFETY: all pointers are valid NUL-terminated strings or live boxes; the
-        // boxes live until after fmi2FreeInstance (Core::drop).
-        let component = unsafe {
-            (shared.fns.instantiate)(
-                name.as_ptr(),
-                fmi2::CO_SIMULATION,
-                guid.as_ptr(),
-                shared.resource_uri.as_ptr(),
-                callbacks,
-                0,
-                i32::from(logging),
-            )
+        let (component, callbacks, function) = match shared.api {
+            Api::Fmi2(f) => {
+                let callbacks = Box::into_raw(Box::new(fmi2::callbacks(log)));
+                // SAFETY: all pointers are valid NUL-terminated strings or live boxes; the
+                // boxes live until after fmi2FreeInstance (Core::drop).
+                let component = unsafe {
+                    (f.instantiate)(
+                        name.as_ptr(),
+                        fmi2::CO_SIMULATION,
+                        guid.as_ptr(),
+                        shared.resource_uri.as_ptr(),
+                        callbacks,
+                        0,
+                        i32::from(logging),
+                    )
+                };
+                (component, callbacks, "fmi2Instantiate")
+            }
+            Api::Fmi3(f) => {
+                // SAFETY: the strings are NUL-terminated; no required intermediate
+                // variables (null, 0); `log` is a live box until after fmi3FreeInstance;
+                // the intermediate-update callback is null, as event mode and early
+                // return are off.
+                let component = unsafe {
+                    (f.instantiate)(
+                        name.as_ptr(),
+                        guid.as_ptr(),
+                        shared.resource_path.as_ptr(),
+                        0,
+                        u8::from(logging),
+                        0,
+                        0,
+                        std::ptr::null(),
+                        0,
+                        log.cast(),
+                        Some(fmi3::log_message),
+                        std::ptr::null(),
+                    )
+                };
+                (
+                    component,
+                    std::ptr::null_mut(),
+                    "fmi3InstantiateCoSimulation",
+                )
+            }
         };
         if component.is_null() {
             // SAFETY: the FMU made no instance, so nothing refers to the boxes.
             unsafe {
-                drop(Box::from_raw(callbacks));
+                if !callbacks.is_null() {
+                    drop(Box::from_raw(callbacks));
+                }
                 drop(Box::from_raw(log));
             }
             uncount(&shared);
             return Err(FmuError::NullInstance {
                 fmu: shared.name.clone(),
+                function,
                 instance: instance_name.to_string(),
             });
         }
@@ -240,6 +318,7 @@ impl Instance {
                     component,
                     fatal: false,
                     time: None,
+                    experiment: (0.0, None),
                 }),
                 callbacks,
                 log,
@@ -263,11 +342,21 @@ impl Instance {
         self.core.lock().time
     }
 
-    /// `fmi2SetupExperiment` from `start` [s] to `stop` [s] (if defined), tolerance
-    /// undefined.
+    /// The experiment from `start` [s] to `stop` [s] (if defined), tolerance undefined:
+    /// `fmi2SetupExperiment` in FMI 2.0; in FMI 3.0, which has no such call, the times
+    /// are kept for [`Instance::enter_initialization_mode`].
     pub fn setup_experiment(&mut self, start: f64, stop: Option<f64>) -> Result<(), FmuError> {
+        let f = match self.core.shared.api {
+            Api::Fmi2(f) => f,
+            Api::Fmi3(_) => {
+                let mut inner = self.core.lock();
+                inner.experiment = (start, stop);
+                inner.time = Some(start);
+                return Ok(());
+            }
+        };
         let (defined, stop_time) = (i32::from(stop.is_some()), stop.unwrap_or(0.0));
-        let mut inner = self.core.call("fmi2SetupExperiment", Some(start), |c, f| {
+        let mut inner = self.core.call("fmi2SetupExperiment", Some(start), |c| {
             // SAFETY: a live component; plain values.
             unsafe { (f.setup_experiment)(c, 0, 0.0, start, defined, stop_time) }
         })?;
@@ -275,161 +364,359 @@ impl Instance {
         Ok(())
     }
 
-    /// `fmi2EnterInitializationMode`.
+    /// `fmi2EnterInitializationMode`, or `fmi3EnterInitializationMode` with the start and
+    /// stop times of [`Instance::setup_experiment`] (start 0 and no stop without it).
     pub fn enter_initialization_mode(&mut self) -> Result<(), FmuError> {
-        self.core
-            .call("fmi2EnterInitializationMode", None, |c, f| {
+        match self.core.shared.api {
+            Api::Fmi2(f) => self.core.call("fmi2EnterInitializationMode", None, |c| {
                 // SAFETY: a live component.
                 unsafe { (f.enter_initialization_mode)(c) }
-            })
-            .map(drop)
+            }),
+            Api::Fmi3(f) => {
+                let (start, stop) = self.core.lock().experiment;
+                let (defined, stop_time) = (u8::from(stop.is_some()), stop.unwrap_or(0.0));
+                self.core
+                    .call("fmi3EnterInitializationMode", Some(start), |c| {
+                        // SAFETY: a live instance; plain values.
+                        unsafe {
+                            (f.enter_initialization_mode)(c, 0, 0.0, start, defined, stop_time)
+                        }
+                    })
+                    .map(|mut inner| {
+                        inner.time = Some(start);
+                        inner
+                    })
+            }
+        }
+        .map(drop)
     }
 
-    /// `fmi2ExitInitializationMode`.
+    /// `fmi2ExitInitializationMode` or `fmi3ExitInitializationMode` (to step mode).
     pub fn exit_initialization_mode(&mut self) -> Result<(), FmuError> {
+        let (function, call) = match self.core.shared.api {
+            Api::Fmi2(f) => ("fmi2ExitInitializationMode", f.exit_initialization_mode),
+            Api::Fmi3(f) => ("fmi3ExitInitializationMode", f.exit_initialization_mode),
+        };
         self.core
-            .call("fmi2ExitInitializationMode", None, |c, f| {
+            .call(function, None, |c| {
                 // SAFETY: a live component.
-                unsafe { (f.exit_initialization_mode)(c) }
+                unsafe { call(c) }
             })
             .map(drop)
     }
 
-    /// `fmi2Terminate`.
+    /// `fmi2Terminate` or `fmi3Terminate`.
     pub fn terminate(&mut self) -> Result<(), FmuError> {
+        let (function, call) = match self.core.shared.api {
+            Api::Fmi2(f) => ("fmi2Terminate", f.terminate),
+            Api::Fmi3(f) => ("fmi3Terminate", f.terminate),
+        };
         self.core
-            .call("fmi2Terminate", None, |c, f| {
+            .call(function, None, |c| {
                 // SAFETY: a live component.
-                unsafe { (f.terminate)(c) }
+                unsafe { call(c) }
             })
             .map(drop)
     }
 
-    /// `fmi2Reset`: back to the state right after instantiation.
+    /// `fmi2Reset` or `fmi3Reset`: back to the state right after instantiation.
     pub fn reset(&mut self) -> Result<(), FmuError> {
-        let mut inner = self.core.call("fmi2Reset", None, |c, f| {
+        let (function, call) = match self.core.shared.api {
+            Api::Fmi2(f) => ("fmi2Reset", f.reset),
+            Api::Fmi3(f) => ("fmi3Reset", f.reset),
+        };
+        let mut inner = self.core.call(function, None, |c| {
             // SAFETY: a live component.
-            unsafe { (f.reset)(c) }
+            unsafe { call(c) }
         })?;
         inner.time = None;
+        inner.experiment = (0.0, None);
         Ok(())
     }
 
-    /// `fmi2DoStep` from the communication point `t` [s] over `h` [s]; inputs are held
-    /// over the step as set. Prior states may still be restored afterwards
-    /// (`noSetFMUStatePriorToCurrentPoint` = false).
+    /// `fmi2DoStep` or `fmi3DoStep` from the communication point `t` [s] over `h` [s];
+    /// inputs are held over the step as set. Prior states may still be restored
+    /// afterwards (`noSetFMUStatePriorToCurrentPoint` = false). An FMI 3.0 step that
+    /// returns OK but sets `terminateSimulation`, or returns early although early return
+    /// was not allowed, is [`FmuError::StepEnded`].
     pub fn do_step(&mut self, t: f64, h: f64) -> Result<(), FmuError> {
-        let mut inner = self.core.call("fmi2DoStep", Some(t), |c, f| {
-            // SAFETY: a live component; plain values.
-            unsafe { (f.do_step)(c, t, h, 0) }
+        let f = match self.core.shared.api {
+            Api::Fmi2(f) => {
+                let mut inner = self.core.call("fmi2DoStep", Some(t), |c| {
+                    // SAFETY: a live component; plain values.
+                    unsafe { (f.do_step)(c, t, h, 0) }
+                })?;
+                inner.time = Some(t + h);
+                return Ok(());
+            }
+            Api::Fmi3(f) => f,
+        };
+        let (mut event, mut terminate, mut early, mut last) = (0u8, 0u8, 0u8, t);
+        let mut inner = self.core.call("fmi3DoStep", Some(t), |c| {
+            // SAFETY: a live instance; the out-parameters are live locals.
+            unsafe {
+                (f.do_step)(
+                    c,
+                    t,
+                    h,
+                    0,
+                    &mut event,
+                    &mut terminate,
+                    &mut early,
+                    &mut last,
+                )
+            }
         })?;
+        let ended = |reason: String| FmuError::StepEnded {
+            fmu: self.core.shared.name.clone(),
+            function: "fmi3DoStep",
+            time: t,
+            reason,
+        };
+        if terminate != 0 {
+            return Err(ended(
+                "the FMU set terminateSimulation: it cannot go on".into(),
+            ));
+        }
+        if early != 0 {
+            return Err(ended(format!(
+                "the FMU returned early at t = {last} s although early return was not allowed"
+            )));
+        }
+        // `eventHandlingNeeded` is only meaningful with event mode, which is off.
         inner.time = Some(t + h);
         Ok(())
     }
 
-    /// `fmi2SetReal`: `values[i]` to the variable `refs[i]`.
+    /// `fmi2SetReal` or `fmi3SetFloat64`: `values[i]` to the variable `refs[i]`.
     pub fn set_real(&mut self, refs: &[u32], values: &[f64]) -> Result<(), FmuError> {
-        self.same_len("fmi2SetReal", refs.len(), values.len())?;
-        self.core
-            .call("fmi2SetReal", None, |c, f| {
-                // SAFETY: both slices hold `refs.len()` elements.
-                unsafe { (f.set_real)(c, refs.as_ptr(), refs.len(), values.as_ptr()) }
-            })
-            .map(drop)
+        let n = refs.len();
+        match self.core.shared.api {
+            Api::Fmi2(f) => {
+                self.same_len("fmi2SetReal", n, values.len())?;
+                self.core.call("fmi2SetReal", None, |c| {
+                    // SAFETY: both slices hold `n` elements.
+                    unsafe { (f.set_real)(c, refs.as_ptr(), n, values.as_ptr()) }
+                })
+            }
+            Api::Fmi3(f) => {
+                self.same_len("fmi3SetFloat64", n, values.len())?;
+                self.core.call("fmi3SetFloat64", None, |c| {
+                    // SAFETY: both slices hold `n` elements; scalars, so nValues = n.
+                    unsafe { (f.set_float64)(c, refs.as_ptr(), n, values.as_ptr(), n) }
+                })
+            }
+        }
+        .map(drop)
     }
 
-    /// `fmi2GetReal`: the variable `refs[i]` into `values[i]`.
+    /// `fmi2GetReal` or `fmi3GetFloat64`: the variable `refs[i]` into `values[i]`.
     pub fn get_real(&self, refs: &[u32], values: &mut [f64]) -> Result<(), FmuError> {
-        self.same_len("fmi2GetReal", refs.len(), values.len())?;
-        self.core
-            .call("fmi2GetReal", None, |c, f| {
-                // SAFETY: both slices hold `refs.len()` elements.
-                unsafe { (f.get_real)(c, refs.as_ptr(), refs.len(), values.as_mut_ptr()) }
-            })
-            .map(drop)
+        let n = refs.len();
+        match self.core.shared.api {
+            Api::Fmi2(f) => {
+                self.same_len("fmi2GetReal", n, values.len())?;
+                self.core.call("fmi2GetReal", None, |c| {
+                    // SAFETY: both slices hold `n` elements.
+                    unsafe { (f.get_real)(c, refs.as_ptr(), n, values.as_mut_ptr()) }
+                })
+            }
+            Api::Fmi3(f) => {
+                self.same_len("fmi3GetFloat64", n, values.len())?;
+                self.core.call("fmi3GetFloat64", None, |c| {
+                    // SAFETY: both slices hold `n` elements; scalars, so nValues = n.
+                    unsafe { (f.get_float64)(c, refs.as_ptr(), n, values.as_mut_ptr(), n) }
+                })
+            }
+        }
+        .map(drop)
     }
 
-    /// `fmi2SetInteger`.
+    /// `fmi2SetInteger`, or in FMI 3.0 `fmi3SetInt32`, with the references of
+    /// enumerations set through `fmi3SetInt64` (their ABI type in FMI 3.0).
     pub fn set_integer(&mut self, refs: &[u32], values: &[i32]) -> Result<(), FmuError> {
-        self.same_len("fmi2SetInteger", refs.len(), values.len())?;
-        self.core
-            .call("fmi2SetInteger", None, |c, f| {
-                // SAFETY: both slices hold `refs.len()` elements.
-                unsafe { (f.set_integer)(c, refs.as_ptr(), refs.len(), values.as_ptr()) }
-            })
-            .map(drop)
-    }
-
-    /// `fmi2GetInteger`.
-    pub fn get_integer(&self, refs: &[u32], values: &mut [i32]) -> Result<(), FmuError> {
-        self.same_len("fmi2GetInteger", refs.len(), values.len())?;
-        self.core
-            .call("fmi2GetInteger", None, |c, f| {
-                // SAFETY: both slices hold `refs.len()` elements.
-                unsafe { (f.get_integer)(c, refs.as_ptr(), refs.len(), values.as_mut_ptr()) }
-            })
-            .map(drop)
-    }
-
-    /// `fmi2SetBoolean` (`fmi2Boolean` is an `int` 0/1 at the ABI).
-    pub fn set_boolean(&mut self, refs: &[u32], values: &[bool]) -> Result<(), FmuError> {
-        self.same_len("fmi2SetBoolean", refs.len(), values.len())?;
-        let ints: Vec<fmi2::Boolean> = values.iter().map(|&b| i32::from(b)).collect();
-        self.core
-            .call("fmi2SetBoolean", None, |c, f| {
-                // SAFETY: both slices hold `refs.len()` elements.
-                unsafe { (f.set_boolean)(c, refs.as_ptr(), refs.len(), ints.as_ptr()) }
-            })
-            .map(drop)
-    }
-
-    /// `fmi2GetBoolean`; any non-zero `int` reads as true.
-    pub fn get_boolean(&self, refs: &[u32], values: &mut [bool]) -> Result<(), FmuError> {
-        self.same_len("fmi2GetBoolean", refs.len(), values.len())?;
-        let mut ints = vec![0 as fmi2::Boolean; refs.len()];
-        drop(self.core.call("fmi2GetBoolean", None, |c, f| {
-            // SAFETY: both slices hold `refs.len()` elements.
-            unsafe { (f.get_boolean)(c, refs.as_ptr(), refs.len(), ints.as_mut_ptr()) }
-        })?);
-        for (v, i) in values.iter_mut().zip(ints) {
-            *v = i != 0;
+        let f = match self.core.shared.api {
+            Api::Fmi2(f) => {
+                self.same_len("fmi2SetInteger", refs.len(), values.len())?;
+                return self
+                    .core
+                    .call("fmi2SetInteger", None, |c| {
+                        // SAFETY: both slices hold `refs.len()` elements.
+                        unsafe { (f.set_integer)(c, refs.as_ptr(), refs.len(), values.as_ptr()) }
+                    })
+                    .map(drop);
+            }
+            Api::Fmi3(f) => f,
+        };
+        self.same_len("fmi3SetInt32", refs.len(), values.len())?;
+        let (ints, enums) = self.split_enumerations(refs);
+        if !ints.is_empty() {
+            let r: Vec<u32> = ints.iter().map(|&i| refs[i]).collect();
+            let v: Vec<i32> = ints.iter().map(|&i| values[i]).collect();
+            drop(self.core.call("fmi3SetInt32", None, |c| {
+                // SAFETY: both vectors hold `r.len()` elements.
+                unsafe { (f.set_int32)(c, r.as_ptr(), r.len(), v.as_ptr(), r.len()) }
+            })?);
+        }
+        if !enums.is_empty() {
+            let r: Vec<u32> = enums.iter().map(|&i| refs[i]).collect();
+            let v: Vec<i64> = enums.iter().map(|&i| i64::from(values[i])).collect();
+            drop(self.core.call("fmi3SetInt64", None, |c| {
+                // SAFETY: both vectors hold `r.len()` elements.
+                unsafe { (f.set_int64)(c, r.as_ptr(), r.len(), v.as_ptr(), r.len()) }
+            })?);
         }
         Ok(())
     }
 
-    /// `fmi2GetFMUstate`: a copy of the instance's state. Refused without calling the
-    /// FMU unless it declares `canGetAndSetFMUstate`.
+    /// `fmi2GetInteger`, or in FMI 3.0 `fmi3GetInt32`, with enumerations read through
+    /// `fmi3GetInt64`; an enumeration value outside `i32` is [`FmuError::OutOfRange`].
+    pub fn get_integer(&self, refs: &[u32], values: &mut [i32]) -> Result<(), FmuError> {
+        let f = match self.core.shared.api {
+            Api::Fmi2(f) => {
+                self.same_len("fmi2GetInteger", refs.len(), values.len())?;
+                return self
+                    .core
+                    .call("fmi2GetInteger", None, |c| {
+                        // SAFETY: both slices hold `refs.len()` elements.
+                        unsafe {
+                            (f.get_integer)(c, refs.as_ptr(), refs.len(), values.as_mut_ptr())
+                        }
+                    })
+                    .map(drop);
+            }
+            Api::Fmi3(f) => f,
+        };
+        self.same_len("fmi3GetInt32", refs.len(), values.len())?;
+        let (ints, enums) = self.split_enumerations(refs);
+        if !ints.is_empty() {
+            let r: Vec<u32> = ints.iter().map(|&i| refs[i]).collect();
+            let mut v = vec![0i32; r.len()];
+            drop(self.core.call("fmi3GetInt32", None, |c| {
+                // SAFETY: both vectors hold `r.len()` elements.
+                unsafe { (f.get_int32)(c, r.as_ptr(), r.len(), v.as_mut_ptr(), r.len()) }
+            })?);
+            for (&i, x) in ints.iter().zip(v) {
+                values[i] = x;
+            }
+        }
+        if !enums.is_empty() {
+            let r: Vec<u32> = enums.iter().map(|&i| refs[i]).collect();
+            let mut v = vec![0i64; r.len()];
+            drop(self.core.call("fmi3GetInt64", None, |c| {
+                // SAFETY: both vectors hold `r.len()` elements.
+                unsafe { (f.get_int64)(c, r.as_ptr(), r.len(), v.as_mut_ptr(), r.len()) }
+            })?);
+            for ((&i, &vr), x) in enums.iter().zip(&r).zip(v) {
+                values[i] = i32::try_from(x).map_err(|_| FmuError::OutOfRange {
+                    fmu: self.core.shared.name.clone(),
+                    function: "fmi3GetInt64",
+                    value_reference: vr,
+                    value: x,
+                })?;
+            }
+        }
+        Ok(())
+    }
+
+    /// `fmi2SetBoolean` (`fmi2Boolean` is an `int` 0/1 at the ABI) or `fmi3SetBoolean`
+    /// (C `bool`, one byte).
+    pub fn set_boolean(&mut self, refs: &[u32], values: &[bool]) -> Result<(), FmuError> {
+        let n = refs.len();
+        match self.core.shared.api {
+            Api::Fmi2(f) => {
+                self.same_len("fmi2SetBoolean", n, values.len())?;
+                let ints: Vec<fmi2::Boolean> = values.iter().map(|&b| i32::from(b)).collect();
+                self.core.call("fmi2SetBoolean", None, |c| {
+                    // SAFETY: both slices hold `n` elements.
+                    unsafe { (f.set_boolean)(c, refs.as_ptr(), n, ints.as_ptr()) }
+                })
+            }
+            Api::Fmi3(f) => {
+                self.same_len("fmi3SetBoolean", n, values.len())?;
+                let bytes: Vec<fmi3::Boolean> = values.iter().map(|&b| u8::from(b)).collect();
+                self.core.call("fmi3SetBoolean", None, |c| {
+                    // SAFETY: both slices hold `n` elements.
+                    unsafe { (f.set_boolean)(c, refs.as_ptr(), n, bytes.as_ptr(), n) }
+                })
+            }
+        }
+        .map(drop)
+    }
+
+    /// `fmi2GetBoolean` or `fmi3GetBoolean`; any non-zero value reads as true.
+    pub fn get_boolean(&self, refs: &[u32], values: &mut [bool]) -> Result<(), FmuError> {
+        let n = refs.len();
+        match self.core.shared.api {
+            Api::Fmi2(f) => {
+                self.same_len("fmi2GetBoolean", n, values.len())?;
+                let mut ints = vec![0 as fmi2::Boolean; n];
+                drop(self.core.call("fmi2GetBoolean", None, |c| {
+                    // SAFETY: both slices hold `n` elements.
+                    unsafe { (f.get_boolean)(c, refs.as_ptr(), n, ints.as_mut_ptr()) }
+                })?);
+                for (v, i) in values.iter_mut().zip(ints) {
+                    *v = i != 0;
+                }
+            }
+            Api::Fmi3(f) => {
+                self.same_len("fmi3GetBoolean", n, values.len())?;
+                let mut bytes = vec![0 as fmi3::Boolean; n];
+                drop(self.core.call("fmi3GetBoolean", None, |c| {
+                    // SAFETY: both slices hold `n` elements.
+                    unsafe { (f.get_boolean)(c, refs.as_ptr(), n, bytes.as_mut_ptr(), n) }
+                })?);
+                for (v, b) in values.iter_mut().zip(bytes) {
+                    *v = b != 0;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// `fmi2GetFMUstate` or `fmi3GetFMUState`: a copy of the instance's state. Refused
+    /// without calling the FMU unless it declares `canGetAndSetFMUstate`
+    /// (`canGetAndSetFMUState` in FMI 3.0).
     pub fn get_state(&self) -> Result<FmuState, FmuError> {
-        let (get, _, _) = self.state_fns("fmi2GetFMUstate")?;
+        let function = self.pick("fmi2GetFMUstate", "fmi3GetFMUState");
+        let (get, _, _) = self.state_fns(function)?;
         let mut state: fmi2::State = std::ptr::null_mut();
-        let guard = self.core.call("fmi2GetFMUstate", None, |c, _| {
+        let guard = self.core.call(function, None, |c| {
             // SAFETY: a live component; a null `state` asks for a new one.
             unsafe { get(c, &mut state) }
         })?;
         drop(guard);
-        self.wrap_state("fmi2GetFMUstate", state)
+        self.wrap_state(function, state)
     }
 
-    /// `fmi2SetFMUstate`: back to `state`, which must come from this instance. Refused
-    /// without calling the FMU unless it declares `canGetAndSetFMUstate`.
+    /// `fmi2SetFMUstate` or `fmi3SetFMUState`: back to `state`, which must come from this
+    /// instance. Refused without calling the FMU unless it declares the capability.
     pub fn set_state(&mut self, state: &FmuState) -> Result<(), FmuError> {
-        let (_, set, _) = self.state_fns("fmi2SetFMUstate")?;
-        self.own(state, "fmi2SetFMUstate")?;
+        let function = self.pick("fmi2SetFMUstate", "fmi3SetFMUState");
+        let (_, set, _) = self.state_fns(function)?;
+        self.own(state, function)?;
         self.core
-            .call("fmi2SetFMUstate", None, |c, _| {
+            .call(function, None, |c| {
                 // SAFETY: a live state of this live component.
                 unsafe { set(c, state.state) }
             })
             .map(drop)
     }
 
-    /// `fmi2SerializedFMUstateSize` + `fmi2SerializeFMUstate`: `state` as bytes. Refused
-    /// without calling the FMU unless it declares `canSerializeFMUstate`.
+    /// `fmi2SerializedFMUstateSize` + `fmi2SerializeFMUstate` (or FMI 3.0's
+    /// `fmi3SerializedFMUStateSize` + `fmi3SerializeFMUState`): `state` as bytes. Refused
+    /// without calling the FMU unless it declares `canSerializeFMUstate`
+    /// (`canSerializeFMUState`).
     pub fn serialize_state(&self, state: &FmuState) -> Result<Vec<u8>, FmuError> {
-        let (size_of, serialize, _) = self.serialize_fns("fmi2SerializeFMUstate")?;
-        self.own(state, "fmi2SerializeFMUstate")?;
+        let function = self.pick("fmi2SerializeFMUstate", "fmi3SerializeFMUState");
+        let size_function = self.pick("fmi2SerializedFMUstateSize", "fmi3SerializedFMUStateSize");
+        let serializer = self.serialize_fns(function)?;
+        self.own(state, function)?;
+        let size_of = match serializer {
+            Serializer::Fmi2(size_of, _, _) | Serializer::Fmi3(size_of, _, _) => size_of,
+        };
         let mut size = 0usize;
-        drop(self.core.call("fmi2SerializedFMUstateSize", None, |c, _| {
+        drop(self.core.call(size_function, None, |c| {
             // SAFETY: a live state of this live component.
             unsafe { size_of(c, state.state, &mut size) }
         })?);
@@ -444,25 +731,56 @@ impl Instance {
             });
         }
         let mut bytes = vec![0u8; size];
-        drop(self.core.call("fmi2SerializeFMUstate", None, |c, _| {
-            // SAFETY: `bytes` holds `size` bytes, as the FMU asked.
-            unsafe { serialize(c, state.state, bytes.as_mut_ptr().cast::<c_char>(), size) }
+        drop(self.core.call(function, None, |c| match serializer {
+            // SAFETY (both): `bytes` holds `size` bytes, as the FMU asked.
+            Serializer::Fmi2(_, serialize, _) => unsafe {
+                serialize(c, state.state, bytes.as_mut_ptr().cast::<c_char>(), size)
+            },
+            Serializer::Fmi3(_, serialize, _) => unsafe {
+                serialize(c, state.state, bytes.as_mut_ptr(), size)
+            },
         })?);
         Ok(bytes)
     }
 
-    /// `fmi2DeSerializeFMUstate`: a state of this instance from bytes made by
-    /// [`Instance::serialize_state`] (of this or another instance of the same FMU).
-    /// Refused without calling the FMU unless it declares `canSerializeFMUstate`.
+    /// `fmi2DeSerializeFMUstate` or `fmi3DeserializeFMUState`: a state of this instance
+    /// from bytes made by [`Instance::serialize_state`] (of this or another instance of
+    /// the same FMU). Refused without calling the FMU unless it declares the capability.
     pub fn deserialize_state(&self, bytes: &[u8]) -> Result<FmuState, FmuError> {
-        let (_, _, deserialize) = self.serialize_fns("fmi2DeSerializeFMUstate")?;
+        let function = self.pick("fmi2DeSerializeFMUstate", "fmi3DeserializeFMUState");
+        let serializer = self.serialize_fns(function)?;
         let mut state: fmi2::State = std::ptr::null_mut();
-        drop(self.core.call("fmi2DeSerializeFMUstate", None, |c, _| {
-            // SAFETY: `bytes` is a live slice of the length given; a null `state` asks
-            // for a new one.
-            unsafe { deserialize(c, bytes.as_ptr().cast::<c_char>(), bytes.len(), &mut state) }
+        drop(self.core.call(function, None, |c| match serializer {
+            // SAFETY (both): `bytes` is a live slice of the length given; a null `state`
+            // asks for a new one.
+            Serializer::Fmi2(_, _, deserialize) => unsafe {
+                deserialize(c, bytes.as_ptr().cast::<c_char>(), bytes.len(), &mut state)
+            },
+            Serializer::Fmi3(_, _, deserialize) => unsafe {
+                deserialize(c, bytes.as_ptr(), bytes.len(), &mut state)
+            },
         })?);
-        self.wrap_state("fmi2DeSerializeFMUstate", state)
+        self.wrap_state(function, state)
+    }
+
+    /// The FMI 2.0 or the FMI 3.0 name, by the FMU's version.
+    fn pick(&self, v2: &'static str, v3: &'static str) -> &'static str {
+        if self.core.fmi3() {
+            v3
+        } else {
+            v2
+        }
+    }
+
+    /// FMI 3.0: the positions in `refs` of plain integers and of enumerations (by the
+    /// description; a reference it does not name counts as an integer).
+    fn split_enumerations(&self, refs: &[u32]) -> (Vec<usize>, Vec<usize>) {
+        let variables = &self.core.shared.description.variables;
+        (0..refs.len()).partition(|&i| {
+            !variables
+                .iter()
+                .any(|v| v.value_reference == refs[i] && v.kind == VarKind::Enumeration)
+        })
     }
 
     fn same_len(&self, function: &'static str, refs: usize, values: usize) -> Result<(), FmuError> {
@@ -486,7 +804,8 @@ impl Instance {
         }
     }
 
-    /// The get/set/free state functions, or the capability error.
+    /// The get/set/free state functions (the same C types in both versions), or the
+    /// capability error.
     fn state_fns(
         &self,
         function: &'static str,
@@ -498,18 +817,22 @@ impl Instance {
             .co_simulation
             .as_ref()
             .is_some_and(|c| c.can_get_and_set_fmu_state);
-        match self.core.shared.fns.state {
+        let fns = match self.core.shared.api {
+            Api::Fmi2(f) => f.state,
+            Api::Fmi3(f) => f.state,
+        };
+        match fns {
             Some(fns) if declared => Ok(fns),
-            _ => Err(self.missing("canGetAndSetFMUstate", function)),
+            _ => Err(self.missing(
+                self.pick("canGetAndSetFMUstate", "canGetAndSetFMUState"),
+                function,
+            )),
         }
     }
 
     /// The serialization functions, or the capability error. Serialized states are
     /// useless without get/set, so both capabilities are required.
-    fn serialize_fns(
-        &self,
-        function: &'static str,
-    ) -> Result<(fmi2::StateSize, fmi2::Serialize, fmi2::Deserialize), FmuError> {
+    fn serialize_fns(&self, function: &'static str) -> Result<Serializer, FmuError> {
         self.state_fns(function)?;
         let declared = self
             .core
@@ -518,9 +841,16 @@ impl Instance {
             .co_simulation
             .as_ref()
             .is_some_and(|c| c.can_serialize_fmu_state);
-        match self.core.shared.fns.serialize {
+        let fns = match self.core.shared.api {
+            Api::Fmi2(f) => f.serialize.map(|(a, b, c)| Serializer::Fmi2(a, b, c)),
+            Api::Fmi3(f) => f.serialize.map(|(a, b, c)| Serializer::Fmi3(a, b, c)),
+        };
+        match fns {
             Some(fns) if declared => Ok(fns),
-            _ => Err(self.missing("canSerializeFMUstate", function)),
+            _ => Err(self.missing(
+                self.pick("canSerializeFMUstate", "canSerializeFMUState"),
+                function,
+            )),
         }
     }
 
@@ -547,4 +877,12 @@ impl Instance {
             core: Arc::clone(&self.core),
         })
     }
+}
+
+/// The size, serialize and deserialize functions of either version (their byte
+/// pointers differ: `char` in FMI 2.0, `uint8_t` in FMI 3.0).
+#[derive(Clone, Copy)]
+enum Serializer {
+    Fmi2(fmi2::StateSize, fmi2::Serialize, fmi2::Deserialize),
+    Fmi3(fmi3::StateSize, fmi3::Serialize, fmi3::Deserialize),
 }

@@ -9,9 +9,18 @@ use libloading::Library;
 
 use super::archive::{self, Unpacked};
 use super::description::{CoSimulation, ModelDescription};
-use super::fmi2::{self, Functions};
 use super::instance::Instance;
 use super::FmuError;
+use super::{fmi2, fmi3};
+
+/// The resolved function table of either FMI version.
+#[derive(Clone, Copy)]
+pub(crate) enum Api {
+    /// An FMI 2.0 binary.
+    Fmi2(fmi2::Functions),
+    /// An FMI 3.0 binary.
+    Fmi3(fmi3::Functions),
+}
 
 /// What instances and states share with their FMU, so that the library stays loaded and
 /// the unpack directory stays on disk while any of them lives. Fields drop in order: the
@@ -20,18 +29,23 @@ pub(crate) struct Loaded {
     /// The FMU's name (the scenario's node name), used in every message.
     pub(crate) name: String,
     /// The resolved functions; valid while `library` is loaded.
-    pub(crate) fns: Functions,
+    pub(crate) api: Api,
     /// The description.
     pub(crate) description: ModelDescription,
-    /// `file://` URI of `resources/`, NUL-terminated for C.
+    /// `file://` URI of `resources/`, NUL-terminated for C (FMI 2.0's
+    /// `fmuResourceLocation`).
     pub(crate) resource_uri: CString,
+    /// Path of `resources/` ending in the platform's separator, NUL-terminated for C
+    /// (FMI 3.0's `resourcePath`, a plain path, not a URI).
+    pub(crate) resource_path: CString,
     /// Live instances (for `canBeInstantiatedOnlyOncePerProcess`).
     pub(crate) instances: AtomicUsize,
     _library: Library,
     unpacked: Unpacked,
 }
 
-/// A loaded FMI 2.0 co-simulation FMU; make instances with [`Fmu::instantiate`].
+/// A loaded FMI 2.0 or FMI 3.0 co-simulation FMU; make instances with
+/// [`Fmu::instantiate`].
 pub struct Fmu {
     shared: Arc<Loaded>,
     path: PathBuf,
@@ -50,8 +64,9 @@ impl std::fmt::Debug for Fmu {
 
 impl Fmu {
     /// Loads the FMU at `path` under the name `name` (the node it will be): unpacks it
-    /// ([`archive::unpack`]), reads its description, requires FMI 2.0 co-simulation,
-    /// opens this platform's binary and resolves every function the importer calls.
+    /// ([`archive::unpack`]), reads its description, requires co-simulation (FMI 2.0 or
+    /// 3.0, by the description's `fmiVersion`), opens this platform's binary and resolves
+    /// every function of that version the importer calls.
     pub fn load(name: &str, path: &Path) -> Result<Fmu, FmuError> {
         let unpacked = archive::unpack(path)?;
         let root = unpacked.root();
@@ -78,33 +93,46 @@ impl Fmu {
                 model: description.model_name.clone(),
             });
         };
-        let library_path = binary(name, &root, &cs)?;
+        let v3 = description.is_fmi3();
+        let library_path = binary(name, &root, &cs, v3)?;
         let library = open(name, &library_path)?;
-        // SAFETY: the library is the FMU's FMI 2.0 binary, as its description says.
-        let fns = unsafe {
-            Functions::load(
-                &library,
-                name,
-                cs.can_get_and_set_fmu_state,
-                cs.can_serialize_fmu_state,
-            )
-        }?;
-        // SAFETY: both functions take no argument and return a static C string.
-        let version = unsafe { c_text((fns.get_version)()) };
-        check_text(name, "fmi2GetVersion", version, "2.0")?;
-        let platform = unsafe { c_text((fns.get_types_platform)()) };
-        check_text(name, "fmi2GetTypesPlatform", platform, "default")?;
-        let uri = file_uri(&root.join("resources"));
-        let resource_uri = CString::new(uri).map_err(|e| FmuError::NulByte {
-            what: "resource URI",
-            value: String::from_utf8_lossy(&e.into_vec()).replace('\0', "\\0"),
-        })?;
+        let (state, serialize) = (cs.can_get_and_set_fmu_state, cs.can_serialize_fmu_state);
+        let api = if v3 {
+            // SAFETY: the library is the FMU's FMI 3.0 binary, as its description says.
+            let fns = unsafe { fmi3::Functions::load(&library, name, state, serialize) }?;
+            // SAFETY: takes no argument and returns a static C string.
+            let version = unsafe { c_text((fns.get_version)()) };
+            check_text(name, "fmi3GetVersion", version, "3.0")?;
+            Api::Fmi3(fns)
+        } else {
+            // SAFETY: the library is the FMU's FMI 2.0 binary, as its description says.
+            let fns = unsafe { fmi2::Functions::load(&library, name, state, serialize) }?;
+            // SAFETY: both functions take no argument and return a static C string.
+            let version = unsafe { c_text((fns.get_version)()) };
+            check_text(name, "fmi2GetVersion", version, "2.0")?;
+            let platform = unsafe { c_text((fns.get_types_platform)()) };
+            check_text(name, "fmi2GetTypesPlatform", platform, "default")?;
+            Api::Fmi2(fns)
+        };
+        let resources = root.join("resources");
+        let c_path = |what, text: String| {
+            CString::new(text).map_err(|e| FmuError::NulByte {
+                what,
+                value: String::from_utf8_lossy(&e.into_vec()).replace('\0', "\\0"),
+            })
+        };
+        let resource_uri = c_path("resource URI", file_uri(&resources))?;
+        // FMI 3.0 asks for the path with a trailing separator, as FMPy passes it.
+        let mut path_text = resources.to_string_lossy().into_owned();
+        path_text.push(std::path::MAIN_SEPARATOR);
+        let resource_path = c_path("resource path", path_text)?;
         Ok(Fmu {
             shared: Arc::new(Loaded {
                 name: name.to_string(),
-                fns,
+                api,
                 description,
                 resource_uri,
+                resource_path,
                 instances: AtomicUsize::new(0),
                 _library: library,
                 unpacked,
@@ -139,6 +167,12 @@ impl Fmu {
         self.shared.resource_uri.to_str().unwrap_or_default()
     }
 
+    /// The path of the unpacked `resources/` directory with a trailing separator, as
+    /// passed to `fmi3InstantiateCoSimulation` (FMI 3.0 takes a path, not a URI).
+    pub fn resource_path(&self) -> &str {
+        self.shared.resource_path.to_str().unwrap_or_default()
+    }
+
     /// Where the FMU is unpacked (removed when the FMU and all its instances are gone).
     pub fn unpack_dir(&self) -> PathBuf {
         self.shared.unpacked.root()
@@ -166,8 +200,9 @@ impl Fmu {
     }
 }
 
-/// The binary for this host: `binaries/<platform>/<modelIdentifier>.<suffix>`.
-fn binary(fmu: &str, root: &Path, cs: &CoSimulation) -> Result<PathBuf, FmuError> {
+/// The binary for this host: `binaries/<platform>/<modelIdentifier>.<suffix>`, where
+/// `<platform>` is FMI 2.0's name (`linux64`) or, for FMI 3.0, a tuple (`x86_64-linux`).
+fn binary(fmu: &str, root: &Path, cs: &CoSimulation, v3: bool) -> Result<PathBuf, FmuError> {
     let id = &cs.model_identifier;
     let available = || {
         let mut v: Vec<String> = std::fs::read_dir(root.join("binaries"))
@@ -181,11 +216,17 @@ fn binary(fmu: &str, root: &Path, cs: &CoSimulation) -> Result<PathBuf, FmuError
         v.sort();
         v
     };
-    let Some((platform, suffix)) = fmi2::host_platform() else {
+    let host = if v3 {
+        fmi3::host_platform()
+    } else {
+        fmi2::host_platform()
+    };
+    let Some((platform, suffix)) = host else {
         return Err(FmuError::NoBinary {
             fmu: fmu.to_string(),
             wanted: format!(
-                "none (FMI 2.0 names no platform for {}-{})",
+                "none (FMI {} names no platform for {}-{})",
+                if v3 { "3.0" } else { "2.0" },
                 std::env::consts::ARCH,
                 std::env::consts::OS
             ),

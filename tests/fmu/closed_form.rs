@@ -1,5 +1,6 @@
 //! The mass-spring-damper FMU against the closed-form solution of the underdamped
-//! oscillator: with F held constant, x − F/k decays as a damped cosine.
+//! oscillator: with F held constant, x − F/k decays as a damped cosine. [`check`] is
+//! shared with the FMI 3.0 form of the same model (`fmi3.rs`).
 
 use crate::fmus::{load, real, start, vr};
 
@@ -16,11 +17,12 @@ fn closed_form(t: f64, m: f64, k: f64, c: f64, x0: f64, v0: f64, f: f64) -> f64 
         * (y0 * (omega_d * t).cos() + (v0 + zeta * omega * y0) / omega_d * (omega_d * t).sin())
 }
 
-/// Steps msd with h = 1 ms for 5 s under the constant force `f` and compares x, and a
-/// with its definition, at every communication point.
-fn check(f: f64) {
+/// Steps the test FMU `stem` (msd or msd3) with h = 1 ms for 5 s under the constant
+/// force `f` and compares x, and a with its definition, at every communication point.
+/// Returns the largest |x − closed form| [m].
+pub fn check(stem: &str, f: f64) -> f64 {
     let (m, k, c, x0, v0) = (1.5, 4.0, 0.4, 1.0, 0.5);
-    let fmu = load("msd", "plant");
+    let fmu = load(stem, "plant");
     let mut inst = start(
         &fmu,
         "plant",
@@ -52,15 +54,16 @@ fn check(f: f64) {
     // The run must actually move: 5 s is over 1.5 periods of the 2π/ω ≈ 3.8 s oscillation.
     let end = real(&inst, x);
     assert!((end - x0).abs() > 0.1, "x barely moved: {end}");
-    eprintln!("msd, F = {f} N: worst |x - closed form| = {worst:e} m");
+    eprintln!("{stem}, F = {f} N: worst |x - closed form| = {worst:e} m");
+    worst
 }
 
 #[test]
 fn msd_free_response_matches_the_closed_form() {
-    check(0.0);
+    check("msd", 0.0);
 }
 
 #[test]
 fn msd_under_a_constant_force_settles_about_f_over_k() {
-    check(2.0);
+    check("msd", 2.0);
 }

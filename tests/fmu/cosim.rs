@@ -31,7 +31,7 @@ fn fmus(dir: &Path) {
 
 /// The closed loop: plant on node 1, controller on node 2; `sense` carries x and v to
 /// the controller, `act` carries u back, each with its period and latency [s].
-fn closed_loop(dt: f64, duration: f64, sense: (f64, f64), act: (f64, f64)) -> Value {
+pub(crate) fn closed_loop(dt: f64, duration: f64, sense: (f64, f64), act: (f64, f64)) -> Value {
     json!({
         "name": "pd_loop",
         "seed": 1,
@@ -59,7 +59,7 @@ fn closed_loop(dt: f64, duration: f64, sense: (f64, f64), act: (f64, f64)) -> Va
 
 /// Writes `v` as `dir/scenario.json`, runs it into `dir/out`, and returns (t, column)
 /// of trace.csv for each named column, and the run's digest.
-fn run(dir: &Path, v: &Value, columns: &[&str]) -> (Vec<f64>, Vec<Vec<f64>>, String) {
+pub(crate) fn run(dir: &Path, v: &Value, columns: &[&str]) -> (Vec<f64>, Vec<Vec<f64>>, String) {
     let path = dir.join("scenario.json");
     std::fs::write(&path, serde_json::to_string_pretty(v).unwrap()).unwrap();
     let s = dsmcosim::scenario::load(&path).unwrap_or_else(|e| panic!("scenario: {e}"));

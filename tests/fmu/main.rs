@@ -1,4 +1,4 @@
-//! FMI 2.0 co-simulation FMUs (issue 31): the loader in `dsmcosim::fmu` against the
+//! FMI 2.0 and FMI 3.0 co-simulation FMUs (issue 31): the loader in `dsmcosim::fmu` against the
 //! test FMUs of `tests/fmus/`, built from C by each test into its own temporary
 //! directory.
 
@@ -12,6 +12,7 @@ mod cosim;
 mod crash;
 mod description;
 mod errors;
+mod fmi3;
 mod fmus;
 mod forks;
 mod loading;

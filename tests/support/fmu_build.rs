@@ -1,7 +1,8 @@
 //! Builds a test FMU from a C source and a model description: compiles the source with
 //! the system C compiler into a shared library and zips it with the description in the
-//! FMI 2.0 layout (`modelDescription.xml`, `binaries/linux64/<id>.so`). Shared by
-//! `tests/fmu` and `examples/build_fmus.rs`.
+//! layout of the description's FMI version (`modelDescription.xml` and
+//! `binaries/linux64/<id>.so` for FMI 2.0, `binaries/x86_64-linux/<id>.so` for FMI 3.0).
+//! Shared by `tests/fmu` and `examples/build_fmus.rs`.
 
 use std::fs::File;
 use std::io::Write;
@@ -9,8 +10,8 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 /// The test FMUs under `tests/fmus/`: each `<stem>.c` with its `<stem>.xml`; the stem
-/// is also the model identifier.
-pub const TEST_FMUS: [&str; 3] = ["msd", "pd", "faulty"];
+/// is also the model identifier. `msd3` is msd in FMI 3.0 form.
+pub const TEST_FMUS: [&str; 4] = ["msd", "pd", "faulty", "msd3"];
 
 /// Builds the test FMU `stem` (one of [`TEST_FMUS`]) as `<dir>/<stem>.fmu`.
 pub fn build_test_fmu(stem: &str, dir: &Path) -> Result<PathBuf, String> {
@@ -26,17 +27,24 @@ pub fn fmus_dir() -> PathBuf {
 
 /// Builds `out` (a `.fmu`) from the C file `src` and the description `xml`: compiles with
 /// `$CC` (default `cc`) `-shared -fPIC -O2 -std=c99 -Wall -Werror` in a private temporary
-/// directory, with the source's directory on the include path, then zips. Returns `out`.
+/// directory, with the source's directory on the include path, then zips. The binary's
+/// folder follows the description's `fmiVersion`: FMI 3.0 names platforms by tuples
+/// (`x86_64-linux`), FMI 2.0 by its own names (`linux64`). Returns `out`.
 pub fn build_fmu(
     src: &Path,
     xml: &Path,
     model_identifier: &str,
     out: &Path,
 ) -> Result<PathBuf, String> {
-    let (platform, suffix) = if cfg!(target_os = "macos") {
-        ("darwin64", "dylib")
-    } else {
-        ("linux64", "so")
+    let text = std::fs::read_to_string(xml).map_err(|e| format!("{}: {e}", xml.display()))?;
+    let fmi3 = text.contains("fmiVersion=\"3.0\"");
+    let (platform, suffix) = match (cfg!(target_os = "macos"), fmi3) {
+        (true, false) => ("darwin64", "dylib"),
+        (true, true) if cfg!(target_arch = "aarch64") => ("aarch64-darwin", "dylib"),
+        (true, true) => ("x86_64-darwin", "dylib"),
+        (false, false) => ("linux64", "so"),
+        (false, true) if cfg!(target_arch = "aarch64") => ("aarch64-linux", "so"),
+        (false, true) => ("x86_64-linux", "so"),
     };
     let tmp = tempfile::tempdir().map_err(|e| format!("temporary directory: {e}"))?;
     let lib = tmp.path().join(format!("{model_identifier}.{suffix}"));

@@ -386,7 +386,8 @@ fn endpoint<'a>(
         return Err(Error::invalid(
             path,
             format!(
-                "FMU {fmu:?}: variable {var:?} is {:?}; connections carry Real variables",
+                "FMU {fmu:?}: variable {var:?} is {}; connections carry Real variables \
+                 (FMI 3.0: scalar Float64)",
                 v.kind
             ),
         ));
@@ -495,6 +496,17 @@ fn spec(
                     ),
                 ))
             }
+            VarKind::Other(_) | VarKind::Array(_) => {
+                return Err(Error::invalid(
+                    p,
+                    format!(
+                        "FMU {:?}: {name:?} is {}; start values are set on Real, Integer, \
+                         Boolean and Enumeration scalars only (FMI 3.0: Float64, Int32, \
+                         Boolean, Enumeration)",
+                        f.name, v.kind
+                    ),
+                ))
+            }
         };
         let whole = value.fract() == 0.0 && value.abs() <= i32::MAX as f64;
         if kind == FmuValueKind::Integer && !whole {
@@ -535,7 +547,7 @@ fn spec(
                         p,
                         format!(
                             "FMU {:?}: {name:?} is not a Real output (causality {:?}, type \
-                             {:?})",
+                             {})",
                             f.name, v.causality, v.kind
                         ),
                     ));
