@@ -297,3 +297,23 @@ pub enum FmuError {
         value: String,
     },
 }
+
+/// Resolves the symbol `name` of an FMU's `library` to a copy of its function pointer;
+/// a missing one is [`FmuError::MissingSymbol`] naming it (both FMI versions' tables
+/// load through this).
+///
+/// # Safety
+/// `T` must be the symbol's true type, which nothing at run time can check.
+pub(crate) unsafe fn symbol<T: Copy>(
+    library: &libloading::Library,
+    fmu: &str,
+    name: &'static str,
+) -> Result<T, FmuError> {
+    // SAFETY: the caller vouches for the type.
+    unsafe { library.get::<T>(name.as_bytes()) }
+        .map(|s| *s)
+        .map_err(|_| FmuError::MissingSymbol {
+            fmu: fmu.to_string(),
+            symbol: name,
+        })
+}

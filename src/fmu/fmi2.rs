@@ -259,20 +259,7 @@ impl Functions {
         state: bool,
         serialize: bool,
     ) -> Result<Functions, FmuError> {
-        /// Resolves one symbol to a copy of its function pointer.
-        unsafe fn sym<T: Copy>(
-            lib: &Library,
-            fmu: &str,
-            name: &'static str,
-        ) -> Result<T, FmuError> {
-            // SAFETY: the caller vouches for the type (see `Functions::load`).
-            unsafe { lib.get::<T>(name.as_bytes()) }
-                .map(|s| *s)
-                .map_err(|_| FmuError::MissingSymbol {
-                    fmu: fmu.to_string(),
-                    symbol: name,
-                })
-        }
+        use super::symbol as sym;
         // SAFETY (all): FMI 2.0 fixes each symbol's type as declared above.
         let l = library;
         unsafe {
