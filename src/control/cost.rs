@@ -42,8 +42,8 @@ impl CostMeter {
         }
     }
 
-    /// Adds one step's constraint values `w`.
-    pub fn add(&mut self, w: &[f64]) {
+    /// Adds one step's constraint values `w` (or the measured signals' values).
+    pub fn add(&mut self, w: impl IntoIterator<Item = f64>) {
         for (s, w) in self.sum_sq.iter_mut().zip(w) {
             *s += w * w;
         }
@@ -101,7 +101,7 @@ mod tests {
         let dt = SimTime(1_000_000);
         let mut m = CostMeter::new(3, dt);
         for k in 0..2000 {
-            m.add(&[0.01, -0.01, 0.01]);
+            m.add([0.01, -0.01, 0.01]);
             if k % 1000 == 999 {
                 m.close(SimTime((k + 1) * dt.0));
             }
@@ -120,7 +120,7 @@ mod tests {
         let mut m = CostMeter::new(1, dt);
         for k in 0..10_000u64 {
             let t = k as f64 * 1e-4;
-            m.add(&[0.5 * (2.0 * std::f64::consts::PI * t).sin()]);
+            m.add([0.5 * (2.0 * std::f64::consts::PI * t).sin()]);
         }
         m.close(SimTime(10_000 * dt.0));
         assert!((m.epochs()[0].cost - 0.5 / 2f64.sqrt()).abs() < 1e-9);
@@ -131,7 +131,7 @@ mod tests {
         let dt = SimTime(1_000_000);
         let mut m = CostMeter::new(1, dt);
         for k in 0..1500 {
-            m.add(&[0.2]);
+            m.add([0.2]);
             if k == 999 {
                 m.close(SimTime(1_000_000_000));
             }

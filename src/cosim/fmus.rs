@@ -46,6 +46,10 @@ pub struct FmuUnit {
     fmu: Option<Arc<Fmu>>,
     /// The instance; a mutex so that a fork (`&self`) can ask it for its state.
     live: Option<Mutex<Instance>>,
+    /// The value references of `FmuSpec::outputs` and `inputs`, gathered once when the
+    /// instance is made, for the calls of every step.
+    output_vrs: Vec<u32>,
+    input_vrs: Vec<u32>,
 }
 
 impl std::fmt::Debug for FmuUnit {
@@ -72,6 +76,8 @@ impl FmuUnit {
             broken: None,
             fmu: None,
             live: None,
+            output_vrs: Vec::new(),
+            input_vrs: Vec::new(),
         }
     }
 
@@ -125,6 +131,8 @@ impl FmuUnit {
                 Arc::new(f)
             }
         };
+        self.output_vrs = spec.outputs.iter().map(|v| v.vr).collect();
+        self.input_vrs = spec.inputs.iter().map(|v| v.vr).collect();
         let mut inst = fmu
             .instantiate(&spec.name, spec.logging)
             .map_err(fmu_error)?;
@@ -145,8 +153,8 @@ impl FmuUnit {
                 inst.set_state(&state).map_err(fmu_error)?;
             }
             None => {
-                let vrs: Vec<u32> = spec.outputs.iter().map(|v| v.vr).collect();
-                inst.get_real(&vrs, &mut self.pending).map_err(fmu_error)?;
+                inst.get_real(&self.output_vrs, &mut self.pending)
+                    .map_err(fmu_error)?;
                 self.published.copy_from_slice(&self.pending);
             }
         }
@@ -168,17 +176,19 @@ impl FmuUnit {
                 .expect("ok: the world starts every FMU before its first event")
                 .get_mut()
                 .unwrap_or_else(|poisoned| poisoned.into_inner());
-            let in_vrs: Vec<u32> = spec.inputs.iter().map(|v| v.vr).collect();
+            // The inputs hold over the lock-step: set once for all its communication
+            // steps.
+            if !self.input_vrs.is_empty() {
+                inst.set_real(&self.input_vrs, &self.inputs)
+                    .map_err(fmu_error)?;
+            }
             while self.time < end {
-                if !in_vrs.is_empty() {
-                    inst.set_real(&in_vrs, &self.inputs).map_err(fmu_error)?;
-                }
                 inst.do_step(self.time.as_secs_f64(), h.as_secs_f64())
                     .map_err(fmu_error)?;
                 self.time = SimTime(self.time.0.saturating_add(h.0));
             }
-            let vrs: Vec<u32> = spec.outputs.iter().map(|v| v.vr).collect();
-            inst.get_real(&vrs, &mut self.pending).map_err(fmu_error)?;
+            inst.get_real(&self.output_vrs, &mut self.pending)
+                .map_err(fmu_error)?;
         }
         if self.time == end {
             self.published.copy_from_slice(&self.pending);
@@ -223,6 +233,8 @@ impl Clone for FmuUnit {
             broken,
             fmu: self.fmu.clone(),
             live: None,
+            output_vrs: Vec::new(),
+            input_vrs: Vec::new(),
         }
     }
 }
@@ -265,6 +277,8 @@ impl<'de> serde::Deserialize<'de> for FmuUnit {
             broken: None,
             fmu: None,
             live: None,
+            output_vrs: Vec::new(),
+            input_vrs: Vec::new(),
         })
     }
 }

@@ -131,8 +131,7 @@ pub fn network_of(
     scenario: &Scenario,
     layout: &Layout,
 ) -> std::result::Result<(Vec<Channel>, Option<TdmaLink>), TdmaError> {
-    let channels = channels_of(scenario, layout);
-    let mut channels = channels;
+    let mut channels = channels_of(scenario, layout);
     let tdma = match &scenario.network {
         NetworkSpec::Ideal => None,
         NetworkSpec::Tdma(_) => {
@@ -901,17 +900,13 @@ impl CoSim {
             return Ok(());
         }
         if self.scenario.cost_signals.is_empty() {
-            self.meter.add(&self.w);
+            self.meter.add(self.w.iter().copied());
         } else {
             // The window's cost is the RMS of the named FMU outputs at the steps' starts,
             // as the links' cost takes their w.
-            let values: Vec<f64> = self
-                .scenario
-                .cost_signals
-                .iter()
-                .map(|&(f, k)| self.fmus[f].output(k))
-                .collect();
-            self.meter.add(&values);
+            let fmus = &self.fmus;
+            let signals = self.scenario.cost_signals.iter();
+            self.meter.add(signals.map(|&(f, k)| fmus[f].output(k)));
         }
         let dt = self.scenario.dt;
         for (unit, spec) in self.fmus.iter_mut().zip(&self.scenario.fmus) {
