@@ -75,8 +75,8 @@ pub struct Recorder {
     invariants: InvariantLog,
     /// The SMC boundary layer's account (SMC runs built with [`Recorder::for_scenario`]).
     layer: Option<LayerWatch>,
-    /// trace.csv's names of the FMU outputs recorded per step (`<fmu>.<variable>`,
-    /// quoted where CSV needs it), after everything else; empty without FMUs.
+    /// The names of the FMU outputs recorded per step (`<fmu>.<variable>`), trace.csv's
+    /// last columns; empty without FMUs.
     #[serde(default)]
     signal_names: Vec<String>,
     /// The traced FMU outputs for signals.svg, one first series each, bounded in length
@@ -147,7 +147,7 @@ impl Recorder {
                 f.outputs
                     .iter()
                     .filter(|v| v.traced)
-                    .map(move |v| crate::output::csv_field(&format!("{}.{}", f.name, v.name)))
+                    .map(move |v| format!("{}.{}", f.name, v.name))
             })
             .collect();
         r.signal_plots = PlotSamples::new(0, r.signal_names.len());
@@ -236,8 +236,9 @@ impl Recorder {
             }
         }
         for name in &self.signal_names {
+            // An FMU's variable names may hold what CSV quotes (`a,b`, `"x"`).
             head.push(',');
-            head.push_str(name);
+            head.push_str(&crate::output::csv_field(name));
         }
         self.line = format!("{head}\n");
         file.write_all(self.line.as_bytes())?;
@@ -509,7 +510,7 @@ impl Recorder {
         self.signal_names
             .iter()
             .zip(&p.firsts)
-            .map(|(name, s)| Series::new(name.trim_matches('"').to_string(), zip(&p.times, s)))
+            .map(|(name, s)| Series::new(name.clone(), zip(&p.times, s)))
             .collect()
     }
 
