@@ -139,6 +139,8 @@ pub struct Report {
 struct Loaded {
     plan: Plan,
     points: Vec<Point>,
+    /// The base scenario's file: points read relative paths from its directory.
+    base_path: PathBuf,
     base_digest: String,
     text: String,
 }
@@ -148,6 +150,8 @@ struct Defined {
     plan: Plan,
     base: Value,
     base_label: String,
+    /// The base scenario's file: points read relative paths from its directory.
+    base_path: PathBuf,
     base_digest: String,
     text: String,
 }
@@ -155,11 +159,12 @@ struct Defined {
 /// Reads the sweep file and its base, and checks every point.
 fn load(sweep_path: &Path, sets: &[String]) -> Result<Loaded> {
     let d = define(sweep_path, sets)?;
-    let points = expand(&d.plan, &d.base, &d.base_label, sets)?;
+    let points = expand(&d.plan, &d.base, (&d.base_label, &d.base_path), sets)?;
     Ok(Loaded {
         plan: d.plan,
         points,
         base_digest: d.base_digest,
+        base_path: d.base_path,
         text: d.text,
     })
 }
@@ -192,19 +197,6 @@ fn define(sweep_path: &Path, sets: &[String]) -> Result<Defined> {
             ),
         ));
     }
-    // The points are validated from text, not from the base's file: an FMU path
-    // relative to the base (as a scenario's is) becomes one relative to where the base
-    // lies, so it reads the same file from every point.
-    if let Some(fmus) = base.get_mut("fmus").and_then(Value::as_array_mut) {
-        let dir = base_path.parent().unwrap_or(Path::new(""));
-        for f in fmus {
-            if let Some(Value::String(path)) = f.get_mut("path") {
-                if Path::new(path.as_str()).is_relative() && !dir.as_os_str().is_empty() {
-                    *path = dir.join(path.as_str()).display().to_string();
-                }
-            }
-        }
-    }
     // The base's digest (which `--resume` and `sweep-merge` compare) covers the
     // overrides: the same file under other `--set`s is another base.
     let mut digest = blake3::Hasher::new();
@@ -222,6 +214,7 @@ fn define(sweep_path: &Path, sets: &[String]) -> Result<Defined> {
             format!("{label} with --set")
         },
         base_digest: digest.finalize().to_hex().to_string(),
+        base_path,
         text,
     })
 }
@@ -278,10 +271,16 @@ pub fn check(sweep_path: &Path) -> Result<Checked> {
 pub fn check_with(sweep_path: &Path, sets: &[String]) -> Result<Checked> {
     let d = define(sweep_path, sets)?;
     let indices = checked_points(&d.plan);
-    let points = expand_points(&d.plan, &d.base, &d.base_label, &indices, sets)?;
+    let points = expand_points(
+        &d.plan,
+        &d.base,
+        (&d.base_label, &d.base_path),
+        &indices,
+        sets,
+    )?;
     let mut warnings = Vec::new();
     for p in &points {
-        let scenario = crate::scenario::parse_str(&p.text, &p.key)?;
+        let scenario = crate::scenario::parse_at(&p.text, &p.key, Some(&d.base_path))?;
         let plan = crate::run::plan::plan(&scenario)?;
         let never: Vec<&str> = plan
             .channels
@@ -433,7 +432,7 @@ fn run_point(out: &Path, loaded: &Loaded, p: &Point, keep: Keep) -> Result<()> {
     let dir = point_dir(out, &p.key);
     create_dir_all(&dir)?;
     let label = format!("{}_{}", loaded.plan.name, p.key);
-    let scenario = crate::scenario::parse_str(&p.text, &label)?;
+    let scenario = crate::scenario::parse_at(&p.text, &label, Some(&loaded.base_path))?;
     let started = Instant::now();
     // `--keep summary` drops the trace files: they are never written, not written and
     // removed.

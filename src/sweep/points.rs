@@ -653,14 +653,20 @@ pub fn checked_points(plan: &Plan) -> Vec<usize> {
 
 /// Builds and validates every point's scenario from `base` (the base scenario's JSON,
 /// the command line's `--set` overrides `sets` applied; `base_label` names it in
-/// messages).
+/// messages; `base_path` is its file, from whose directory relative paths in it, an
+/// FMU's, are read as from the base itself).
 ///
 /// Every point is checked before any is returned; the first failure (in index order) is
 /// the error, naming the axis (`axes[1].pointer: …`) or the point and its axis values
 /// (`point p3 (drift = 50, T = 0.5): dt: …`).
-pub fn expand(plan: &Plan, base: &Value, base_label: &str, sets: &[String]) -> Result<Vec<Point>> {
+pub fn expand(
+    plan: &Plan,
+    base: &Value,
+    (base_label, base_path): (&str, &std::path::Path),
+    sets: &[String],
+) -> Result<Vec<Point>> {
     let all: Vec<usize> = (0..plan.points.len()).collect();
-    expand_points(plan, base, base_label, &all, sets)
+    expand_points(plan, base, (base_label, base_path), &all, sets)
 }
 
 /// [`expand`] of the points `indices` (ascending) only: the first failure in their order
@@ -668,7 +674,7 @@ pub fn expand(plan: &Plan, base: &Value, base_label: &str, sets: &[String]) -> R
 pub fn expand_points(
     plan: &Plan,
     base: &Value,
-    base_label: &str,
+    (base_label, base_path): (&str, &std::path::Path),
     indices: &[usize],
     sets: &[String],
 ) -> Result<Vec<Point>> {
@@ -701,7 +707,7 @@ pub fn expand_points(
     };
     let results: Vec<Result<Point>> = indices
         .par_iter()
-        .map(|&i| point(plan, base, base_seed, i, sets))
+        .map(|&i| point(plan, (base, base_path), base_seed, i, sets))
         .collect();
     results.into_iter().collect()
 }
@@ -709,7 +715,7 @@ pub fn expand_points(
 /// Builds and validates point `i`, with the checks `run` makes before it starts.
 fn point(
     plan: &Plan,
-    base: &Value,
+    (base, base_path): (&Value, &std::path::Path),
     base_seed: Option<u64>,
     i: usize,
     sets: &[String],
@@ -718,30 +724,30 @@ fn point(
     let mut text = serde_json::to_string_pretty(&doc)
         .map_err(|e| Error::invalid(format!("point p{i}"), e.to_string()))?;
     text.push('\n');
-    let scenario = crate::scenario::parse_str(&text, &format!("{}_{}", plan.name, plan.key(i)))
-        .map_err(|e| {
-            // A field a `--set` gave names that override, unless the sweep set it later.
-            let later: Vec<String> = plan
-                .overrides
-                .iter()
-                .map(|(p, _)| p.to_string())
-                .chain(plan.axes.iter().map(|a| a.pointer.to_string()))
-                .collect();
-            let e = crate::scenario::overrides::name_override(e, sets, &later);
-            let note: String = created
-                .iter()
-                .map(|&k| {
-                    format!(
-                        "; axes[{k}].pointer {} adds a key the base scenario does not have",
-                        plan.axes[k].pointer
-                    )
-                })
-                .collect();
-            Error::invalid(
-                format!("point p{i} ({})", plan.describe(i)),
-                format!("{e}{note}"),
-            )
-        })?;
+    let label = format!("{}_{}", plan.name, plan.key(i));
+    let scenario = crate::scenario::parse_at(&text, &label, Some(base_path)).map_err(|e| {
+        // A field a `--set` gave names that override, unless the sweep set it later.
+        let later: Vec<String> = plan
+            .overrides
+            .iter()
+            .map(|(p, _)| p.to_string())
+            .chain(plan.axes.iter().map(|a| a.pointer.to_string()))
+            .collect();
+        let e = crate::scenario::overrides::name_override(e, sets, &later);
+        let note: String = created
+            .iter()
+            .map(|&k| {
+                format!(
+                    "; axes[{k}].pointer {} adds a key the base scenario does not have",
+                    plan.axes[k].pointer
+                )
+            })
+            .collect();
+        Error::invalid(
+            format!("point p{i} ({})", plan.describe(i)),
+            format!("{e}{note}"),
+        )
+    })?;
     // What `run` would still refuse (limits, a simplex that does not fit), before any
     // point runs.
     crate::run::preflight(&scenario, &crate::run::RunOptions::default())
