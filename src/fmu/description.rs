@@ -264,23 +264,30 @@ fn is_fmi3(version: &str) -> bool {
     version == "3.0" || version.starts_with("3.0.")
 }
 
+/// A variable element's `name` and `valueReference` (both versions): a missing name is
+/// told at `name_at` (the element by position), a bad reference by the element's
+/// `element` and name.
+fn name_and_reference(n: Node, name_at: &str, element: &str) -> Result<(String, u32), FmuError> {
+    let name = n
+        .attribute("name")
+        .ok_or_else(|| bad(name_at, "missing".into()))?
+        .to_string();
+    let at = format!("{element} '{name}'@valueReference");
+    let vr = n
+        .attribute("valueReference")
+        .ok_or_else(|| bad(&at, "missing".into()))?;
+    let value_reference = vr
+        .trim()
+        .parse::<u32>()
+        .map_err(|_| bad(&at, format!("'{vr}' is not a 32-bit unsigned integer")))?;
+    Ok((name, value_reference))
+}
+
 /// Reads the `index`-th (0-based) `<ScalarVariable>`.
 fn variable(index: usize, n: Node) -> Result<ScalarVariable, FmuError> {
     let at = |attr: &str| format!("ScalarVariable[{}]@{attr}", index + 1);
-    let name = n
-        .attribute("name")
-        .ok_or_else(|| bad(&at("name"), "missing".into()))?
-        .to_string();
+    let (name, value_reference) = name_and_reference(n, &at("name"), "ScalarVariable")?;
     let at = |attr: &str| format!("ScalarVariable '{name}'@{attr}");
-    let vr = n
-        .attribute("valueReference")
-        .ok_or_else(|| bad(&at("valueReference"), "missing".into()))?;
-    let value_reference = vr.trim().parse::<u32>().map_err(|_| {
-        bad(
-            &at("valueReference"),
-            format!("'{vr}' is not a 32-bit unsigned integer"),
-        )
-    })?;
     let causality = causality(n, &at("causality"), false)?;
     let variability = variability(n, &at("variability"), "continuous")?;
     let ty = n.children().find(|c| c.is_element()).ok_or_else(|| {
@@ -319,20 +326,8 @@ fn variable3(index: usize, n: Node) -> Result<ScalarVariable, FmuError> {
             format!("unknown variable element <{element}>"),
         ));
     };
-    let name = n
-        .attribute("name")
-        .ok_or_else(|| bad(&at("name"), "missing".into()))?
-        .to_string();
+    let (name, value_reference) = name_and_reference(n, &at("name"), element)?;
     let at = |attr: &str| format!("{element} '{name}'@{attr}");
-    let vr = n
-        .attribute("valueReference")
-        .ok_or_else(|| bad(&at("valueReference"), "missing".into()))?;
-    let value_reference = vr.trim().parse::<u32>().map_err(|_| {
-        bad(
-            &at("valueReference"),
-            format!("'{vr}' is not a 32-bit unsigned integer"),
-        )
-    })?;
     let causality = causality(n, &at("causality"), true)?;
     let default = if matches!(type_name, "Float64" | "Float32") {
         "continuous"

@@ -729,6 +729,11 @@ impl Scenario {
         let model = self.partition.as_ref().map_or(1, |p| p.nodes);
         self.fmus.iter().map(|f| f.node + 1).fold(model, usize::max)
     }
+
+    /// The node (0-based) holding body `b`: its partition node, or node 0.
+    pub fn node_of_body(&self, b: usize) -> usize {
+        self.partition.as_ref().map_or(0, |p| p.node_of[b])
+    }
 }
 
 /// The highest node number an FMU may run on (1-based): each node is a place in the
@@ -867,7 +872,7 @@ impl ConnectionSpec {
     pub fn from_node(&self, s: &Scenario) -> usize {
         match self.from {
             SignalSource::Fmu { fmu, .. } => s.fmus[fmu].node,
-            SignalSource::Body { body, .. } => s.partition.as_ref().map_or(0, |p| p.node_of[body]),
+            SignalSource::Body { body, .. } => s.node_of_body(body),
         }
     }
 
@@ -875,9 +880,7 @@ impl ConnectionSpec {
     pub fn to_node(&self, s: &Scenario) -> usize {
         match self.to {
             SignalSink::Fmu { fmu, .. } => s.fmus[fmu].node,
-            SignalSink::BodyForce { body, .. } => {
-                s.partition.as_ref().map_or(0, |p| p.node_of[body])
-            }
+            SignalSink::BodyForce { body, .. } => s.node_of_body(body),
         }
     }
 }
