@@ -26,12 +26,7 @@
 
 #define MODEL_TOKEN "{b3f1d6a2-7c4e-4f0a-9e21-5d8c3a6b7f03}"
 
-typedef struct {
-    double m, k, c, x0, v0; /* parameters [kg], [N/m], [N s/m], [m], [m/s] */
-    double F;               /* input [N] */
-    double x, v;            /* state [m], [m/s] */
-    double time;            /* [s] */
-} ModelData;
+#include "msd_model.h"
 
 typedef enum { MODE_INSTANTIATED, MODE_INITIALIZATION, MODE_STEP, MODE_TERMINATED } Mode;
 
@@ -45,8 +40,6 @@ typedef struct {
 
 enum { VR_M, VR_K, VR_C, VR_X0, VR_V0, VR_F, VR_X, VR_V, VR_A, VR_TIME };
 
-/* Largest internal RK4 step [s]. */
-#define MAX_SUBSTEP 1e-4
 
 /* Logs through the importer: errors always, the rest when logging is on. */
 static void log_text(Instance *in, fmi3Status status, const char *category, const char *message) {
@@ -59,21 +52,6 @@ static fmi3Status refuse(Instance *in, const char *what) {
     return fmi3Error;
 }
 
-static void model_defaults(ModelData *d) {
-    d->m = 1.0;
-    d->k = 4.0;
-    d->c = 0.4;
-    d->x0 = 1.0;
-    d->v0 = 0.0;
-    d->F = 0.0;
-    d->x = d->x0;
-    d->v = d->v0;
-    d->time = 0.0;
-}
-
-static double acceleration(const ModelData *d, double x, double v) {
-    return (d->F - d->k * x - d->c * v) / d->m;
-}
 
 static fmi3Status get_float64(Instance *in, fmi3ValueReference vr, fmi3Float64 *value) {
     const ModelData *d = &in->d;
@@ -113,27 +91,9 @@ static fmi3Status set_float64(Instance *in, fmi3ValueReference vr, fmi3Float64 v
     return fmi3OK;
 }
 
-/* msd.c's model_do_step, line for line. */
 static fmi3Status model_do_step(Instance *in, fmi3Float64 t, fmi3Float64 h) {
-    ModelData *d = &in->d;
-    /* The small margin keeps h = 1 ms at 10 substeps despite 1e-3 / 1e-4 rounding up. */
-    long n = (long)ceil(h / MAX_SUBSTEP - 1e-9);
-    double dt, x = d->x, v = d->v;
     (void)t;
-    if (n < 1) n = 1;
-    dt = h / (double)n;
-    for (long i = 0; i < n; i++) {
-        double k1x = v, k1v = acceleration(d, x, v);
-        double k2x = v + 0.5 * dt * k1v, k2v = acceleration(d, x + 0.5 * dt * k1x, k2x);
-        double k3x = v + 0.5 * dt * k2v, k3v = acceleration(d, x + 0.5 * dt * k2x, k3x);
-        double k4x = v + dt * k3v, k4v = acceleration(d, x + dt * k3x, k4x);
-        x += dt / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
-        v += dt / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
-    }
-    if (!isfinite(x) || !isfinite(v) || !isfinite(acceleration(d, x, v)))
-        return refuse(in, "the state is no longer finite");
-    d->x = x;
-    d->v = v;
+    if (msd_integrate(&in->d, h) != 0) return refuse(in, "the state is no longer finite");
     return fmi3OK;
 }
 
