@@ -87,32 +87,18 @@ fn summary(dir: &Path) -> Value {
         .expect("summary is JSON")
 }
 
-/// Every shipped scenario validates. One with FMUs reads them from `fmu/` beside it,
-/// which a plain checkout does not hold (`cargo run --example build_fmus --
-/// scenarios/fmu` builds them for users): it is validated as a copy in a scratch
-/// directory beside the test FMUs built there.
+/// Every shipped scenario validates (a scene with FMUs beside the test FMUs, which a
+/// plain checkout does not hold).
 #[test]
 fn shipped_scenarios_validate() {
     let dir = scratch("shipped_validate");
     let mut checked = 0;
     for entry in std::fs::read_dir(repo().join("scenarios")).expect("scenarios/") {
-        let mut p = entry.expect("entry").path();
+        let p = entry.expect("entry").path();
         if p.extension().is_none_or(|e| e != "json") {
             continue;
         }
-        let text = std::fs::read_to_string(&p).expect("scenario");
-        let v: Value = serde_json::from_str(&text).expect("JSON");
-        if v.get("fmus").is_some() {
-            let fmus = dir.join("fmu");
-            std::fs::create_dir_all(&fmus).expect("scratch");
-            for stem in fmu_build::TEST_FMUS {
-                if !fmus.join(format!("{stem}.fmu")).exists() {
-                    fmu_build::build_test_fmu(stem, &fmus).unwrap_or_else(|e| panic!("{e}"));
-                }
-            }
-            p = dir.join(p.file_name().expect("file name"));
-            std::fs::write(&p, &text).expect("copy");
-        }
+        let p = fmu_build::beside_test_fmus(&p, &dir).unwrap_or_else(|e| panic!("{e}"));
         let out = run(&["validate", p.to_str().expect("utf-8 path")]);
         assert!(out.status.success(), "{}: {}", p.display(), said(&out));
         checked += 1;

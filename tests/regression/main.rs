@@ -70,27 +70,13 @@ fn stored_runs(results: &Path) -> (Vec<Stored>, Vec<String>) {
     (runs, without)
 }
 
-/// Loads a shipped scenario. One with FMUs reads them (`fmu/*.fmu` beside it, which
-/// a checkout does not hold: `cargo run --example build_fmus -- scenarios/fmu` builds
-/// them for users) from the test FMUs built here into `scratch/fmu/`, as if the file
-/// lay in `scratch`.
+/// Loads a shipped scenario (one with FMUs as a copy in `scratch` beside the test FMUs
+/// built there, see [`fmu_build::beside_test_fmus`]).
 fn load(file: &Path, scratch: &Path) -> dsmcosim::scenario::Scenario {
-    let text = std::fs::read_to_string(file).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
     let label = file.display().to_string();
-    let fmus: serde_json::Value = serde_json::from_str(&text).expect("JSON");
-    if fmus.get("fmus").is_none() {
-        return dsmcosim::scenario::parse_at(&text, &label, Some(file))
-            .unwrap_or_else(|e| panic!("{label}: {e}"));
-    }
-    let dir = scratch.join("fmu");
-    std::fs::create_dir_all(&dir).expect("scratch");
-    for stem in fmu_build::TEST_FMUS {
-        if !dir.join(format!("{stem}.fmu")).exists() {
-            fmu_build::build_test_fmu(stem, &dir).unwrap_or_else(|e| panic!("{stem}: {e}"));
-        }
-    }
-    let beside = scratch.join(file.file_name().expect("a file name"));
-    dsmcosim::scenario::parse_at(&text, &label, Some(&beside))
+    let path = fmu_build::beside_test_fmus(file, scratch).unwrap_or_else(|e| panic!("{e}"));
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{label}: {e}"));
+    dsmcosim::scenario::parse_at(&text, &label, Some(&path))
         .unwrap_or_else(|e| panic!("{label}: {e}"))
 }
 

@@ -18,6 +18,9 @@ use dsmcosim::Error;
 use proptest::prelude::*;
 use serde_json::{json, Value};
 
+#[path = "../support/fmu_build.rs"]
+mod fmu_build;
+
 /// A valid explicit scenario that sets every section.
 fn base() -> Value {
     json!({
@@ -193,10 +196,14 @@ fn the_bases_are_valid() {
 #[test]
 fn shipped_scenarios_load() {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
+    let scratch = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("shipped_load");
     let mut count = 0;
     for entry in std::fs::read_dir(&dir).unwrap() {
         let path = entry.unwrap().path();
         if path.extension().is_some_and(|e| e == "json") {
+            // A scene with FMUs reads them beside it: from the test FMUs built here.
+            let path =
+                fmu_build::beside_test_fmus(&path, &scratch).unwrap_or_else(|e| panic!("{e}"));
             if let Err(e) = load(&path) {
                 panic!("{}: {e}", path.display());
             }

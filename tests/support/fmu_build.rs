@@ -13,6 +13,30 @@ use std::process::Command;
 /// is also the model identifier. `msd3` is msd in FMI 3.0 form.
 pub const TEST_FMUS: [&str; 4] = ["msd", "pd", "faulty", "msd3"];
 
+/// Where a test reads shipped scenario `file` from: the file itself, or, for a scene with
+/// FMUs (which reads `fmu/*.fmu` beside it, built for users by `cargo run --example
+/// build_fmus -- scenarios/fmu` and absent from a plain checkout), a copy of it in
+/// `scratch` beside the test FMUs built into `scratch/fmu/`.
+#[allow(dead_code)] // not every includer reads shipped scenarios
+pub fn beside_test_fmus(file: &Path, scratch: &Path) -> Result<PathBuf, String> {
+    let text = std::fs::read_to_string(file).map_err(|e| format!("{}: {e}", file.display()))?;
+    let v: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", file.display()))?;
+    if v.get("fmus").is_none() {
+        return Ok(file.to_path_buf());
+    }
+    let dir = scratch.join("fmu");
+    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    for stem in TEST_FMUS {
+        if !dir.join(format!("{stem}.fmu")).exists() {
+            build_test_fmu(stem, &dir)?;
+        }
+    }
+    let copy = scratch.join(file.file_name().ok_or("a scenario file has a name")?);
+    std::fs::write(&copy, text).map_err(|e| format!("{}: {e}", copy.display()))?;
+    Ok(copy)
+}
+
 /// Builds the test FMU `stem` (one of [`TEST_FMUS`]) as `<dir>/<stem>.fmu`.
 pub fn build_test_fmu(stem: &str, dir: &Path) -> Result<PathBuf, String> {
     let src = fmus_dir().join(format!("{stem}.c"));
