@@ -6,7 +6,9 @@
 //!   ghosts and its links, and how it builds and applies messages;
 //! - [`coupling`]: what a node does with border data that arrives late (`reset`,
 //!   `predict`, `passive`): ghost histories and corrections, extrapolated forces, the
-//!   energy accounts of the border ports.
+//!   energy accounts of the border ports;
+//! - [`momentum`]: the momentum a predicting coupling makes or its brake takes,
+//!   measured and given back to the net as a whole.
 //!
 //! A monolithic run is the one-node layout: the node's system is the whole model, it
 //! has no ghosts and sends nothing.
@@ -15,6 +17,7 @@ pub mod com;
 pub mod coupling;
 pub mod layout;
 pub mod line;
+pub mod momentum;
 pub mod node;
 
 pub use layout::Layout;

@@ -604,7 +604,11 @@ impl CoSim {
                 }
                 // The nodes' state is that of the next step's time.
                 let state_time = SimTime(self.steps_done * self.scenario.dt.0);
-                self.nodes[msg.to].apply(msg.from, msg.sent, state_time, &msg.payload);
+                let to = &mut self.nodes[msg.to];
+                if let Some(made) = msg.momentum {
+                    to.receive_momentum(msg.from, msg.sent, made);
+                }
+                to.apply(msg.from, msg.sent, state_time, &msg.payload);
                 Ok(())
             }
             Event::WindowEnd => {
@@ -747,6 +751,7 @@ impl CoSim {
                     connection: route.body,
                     value,
                 },
+                momentum: None,
             });
         }
         let from = &mut self.nodes[route.from];
@@ -770,6 +775,7 @@ impl CoSim {
             channel: c,
             sent: t,
             payload,
+            momentum: from.momentum_made(),
         })
     }
 
@@ -784,8 +790,13 @@ impl CoSim {
     /// A state message is sampled now: its receiver keeps its ghost's state of the
     /// sample time.
     fn snapshot(&mut self, msg: &Message) {
-        if let crate::network::Payload::State { body, .. } = msg.payload {
-            self.nodes[msg.to].snapshot_ghost(body, msg.sent);
+        match msg.payload {
+            Payload::State { body, .. } => self.nodes[msg.to].snapshot_ghost(body, msg.sent),
+            Payload::Force { body, .. } => {
+                self.nodes[msg.to].snapshot_port(body, msg.from, msg.sent)
+            }
+            Payload::Line(sample) => self.nodes[msg.to].snapshot_line(sample.link, msg.sent),
+            Payload::Signal { .. } => {}
         }
     }
 
@@ -1126,6 +1137,7 @@ impl CoSim {
 /// serial lock-step stops).
 fn finish_node(node: &mut Node, t: SimTime) -> std::result::Result<(), EvalError> {
     node.system.finish_step(t, &mut node.state)?;
+    node.book_ghost_impulses();
     node.restore_held_ghosts();
     Ok(())
 }

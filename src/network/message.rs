@@ -65,6 +65,10 @@ pub enum Payload {
         /// `passive`: the energy the sender's bodies have put into the port of this
         /// body so far [J] (zero where not sent).
         energy: f64,
+        /// A predicting coupling: the impulse the sender's links have put on its ghost
+        /// of the body so far [N·s] (zero where not sent).
+        #[serde(default)]
+        impulse: Vector3<f64>,
     },
 }
 
@@ -103,6 +107,10 @@ pub struct LineSample {
     pub p: Vector3<f64>,
     /// The sending end's anchor velocity [m/s].
     pub v: Vector3<f64>,
+    /// The owner end's: the impulse the line has applied to its body so far [N·s]
+    /// (`partition::momentum`; zero from the other end).
+    #[serde(default)]
+    pub impulse: Vector3<f64>,
 }
 
 /// A message in flight.
@@ -118,4 +126,8 @@ pub struct Message {
     pub sent: SimTime,
     /// The data.
     pub payload: Payload,
+    /// A predicting coupling: the momentum the sender's coupling has made [N·s]
+    /// (`partition::momentum`).
+    #[serde(default)]
+    pub momentum: Option<Vector3<f64>>,
 }

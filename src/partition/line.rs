@@ -248,6 +248,12 @@ pub struct LineEnd {
     pub load: (Vector3<f64>, Vector3<f64>),
     /// Energy the line gave this end's body so far, `∫ −T s dt` [J] (negative: taken).
     pub given: f64,
+    /// The impulse the line has applied to this end's body so far [N·s].
+    pub impulse: Vector3<f64>,
+    /// The non-owner end: its `impulse` at each of the owner end's samples still in
+    /// flight, to compare with the owner end's when the sample arrives
+    /// (`partition::momentum`).
+    pub impulse_history: std::collections::VecDeque<(SimTime, Vector3<f64>)>,
 }
 
 impl LineEnd {
@@ -290,6 +296,8 @@ impl LineEnd {
             tension: initial_wave,
             load: (Vector3::zeros(), Vector3::zeros()),
             given: 0.0,
+            impulse: Vector3::zeros(),
+            impulse_history: std::collections::VecDeque::new(),
         }
     }
 
@@ -328,8 +336,10 @@ impl LineEnd {
         let z = self.impedance;
         self.tension = c + z * s;
         self.acc += (c + 2.0 * z * s) * h;
-        // The work on the body itself, at its own velocity.
+        // The work on the body itself, at its own velocity; the impulse (the force is
+        // held over the step).
         self.given -= self.tension * s * h;
+        self.impulse += n * (self.tension * h);
         n * self.tension
     }
 
@@ -356,6 +366,12 @@ impl LineEnd {
             span,
             p,
             v,
+            // Only the owner end's impulse is compared (by the other end).
+            impulse: if self.owner_side {
+                self.impulse
+            } else {
+                Vector3::zeros()
+            },
         }
     }
 
@@ -447,6 +463,7 @@ mod tests {
             span: ms(2),
             p: Vector3::new(1.0, 0.0, 0.0),
             v: Vector3::zeros(),
+            impulse: Vector3::zeros(),
         };
         e.receive(ms(4), ms(5), &sample);
         assert_eq!(
@@ -490,6 +507,7 @@ mod tests {
                 span: ms(1),
                 p: Vector3::new(1.0, 0.0, 0.0),
                 v: Vector3::zeros(),
+                impulse: Vector3::zeros(),
             },
         );
         // Hold long over and the filter settled: the tension decays to zero.

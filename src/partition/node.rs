@@ -11,6 +11,7 @@ mod passivity;
 use super::com::ComReference;
 use super::coupling::{Correction, Extrapolated, GhostHistory, GhostSample, PortAccount};
 use super::line::{initial_wave, LineEnd, LineSet};
+use super::momentum::MomentumLedger;
 use super::Layout;
 use crate::kernel::SimTime;
 use crate::multibody::{State, System};
@@ -86,6 +87,40 @@ pub struct Node {
     lines: Vec<LineEnd>,
     /// The centre-of-mass velocity the lines measure against (a node with lines).
     com: Option<ComReference>,
+    /// A predicting coupling's momentum account (`partition::momentum`).
+    momentum: Option<MomentumAccount>,
+}
+
+/// A node's side of the momentum account (`partition::momentum`): what it measures.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+struct MomentumAccount {
+    ledger: MomentumLedger,
+    /// Whether ghosts integrate (their momentum measures the links' impulse on them).
+    ports: bool,
+    /// Per incoming port (an own body and a node that ghosts it): the body, the node,
+    /// the impulse its border forces have applied [N·s], and that impulse at each of
+    /// the port's force samples still in flight.
+    incoming: Vec<IncomingPort>,
+    /// Per held force: its incoming port.
+    port_of: Vec<usize>,
+    /// Per ghost: the impulse this node's links have put on it [N·s].
+    ghost_impulse: Vec<Vector3<f64>>,
+    /// Per ghost, over the current step: its velocity at the start and the impulse of
+    /// its owner-side load.
+    ghost_step: Vec<(Vector3<f64>, Vector3<f64>)>,
+    /// Per ghost: its mass [kg].
+    ghost_mass: Vec<f64>,
+    /// Per line end (`Node::lines`): its slot in the ledger where this end books the
+    /// line's momentum (the end that is not the link owner's), else `None`.
+    line_slot: Vec<Option<usize>>,
+}
+
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+struct IncomingPort {
+    body: usize,
+    from: usize,
+    applied: Vector3<f64>,
+    history: std::collections::VecDeque<(SimTime, Vector3<f64>)>,
 }
 
 impl Node {
@@ -216,6 +251,8 @@ impl Node {
             coupling.held_now = vec![(Vector3::zeros(), Vector3::zeros()); held_forces.len()];
         }
         let line_ends = line_ends(scenario, layout, index, lines, &local_body, owned);
+        let momentum = (scheme.predicts() && layout.nodes > 1)
+            .then(|| momentum_account(scenario, layout, index, (&held_forces, &line_ends), ghosts));
         Node {
             index,
             system,
@@ -231,6 +268,7 @@ impl Node {
             coupling,
             com: (!line_ends.is_empty() || scheme.tank().is_some())
                 .then(|| ComReference::new(scenario)),
+            momentum,
             lines: line_ends,
         }
     }
@@ -394,6 +432,10 @@ impl Node {
             torque,
             force_rate,
             torque_rate,
+            impulse: self
+                .momentum
+                .as_ref()
+                .map_or_else(Vector3::zeros, |m| m.ghost_impulse[body - self.owned]),
             energy: self
                 .coupling
                 .ports_out
@@ -490,7 +532,9 @@ impl Node {
                 torque_rate,
                 energy,
                 body,
+                impulse,
             } => {
+                self.receive_port_impulse(from, sent, *body, *impulse);
                 if let Some(g) = self.local(*body) {
                     if let Some(p) = self
                         .coupling
@@ -529,6 +573,38 @@ impl Node {
                 }
             }
         }
+    }
+
+    /// A force sample of the port (own body `g` global, node `from`) taken at `sent`
+    /// says the sender's links had put `impulse` on their ghost of `g` by then: the port
+    /// has made the difference to what this node had applied by then.
+    fn receive_port_impulse(
+        &mut self,
+        from: usize,
+        sent: SimTime,
+        g: usize,
+        impulse: Vector3<f64>,
+    ) {
+        let Some(b) = self.local(g) else { return };
+        let Some(m) = &mut self.momentum else { return };
+        if !m.ports {
+            return;
+        }
+        let Some(p) = m
+            .incoming
+            .iter()
+            .position(|p| p.body == b && p.from == from)
+        else {
+            return;
+        };
+        let port = &mut m.incoming[p];
+        let Some(&(_, applied)) = port.history.iter().find(|(t, _)| *t == sent) else {
+            return;
+        };
+        while port.history.front().is_some_and(|(t, _)| *t <= sent) {
+            port.history.pop_front();
+        }
+        m.ledger.port(p, applied - impulse);
     }
 
     /// The owner of global body `g` samples it for this node at `t` (the message leaves
@@ -604,9 +680,11 @@ impl Node {
         if let Some(com) = &mut self.com {
             com.advance(t);
         }
+        self.book_step_impulses(t, cap);
         if let Some(tank) = self.coupling.scheme.tank() {
             self.passivity(tank);
         }
+        self.give_back_momentum();
         self.step_lines(t);
     }
 
@@ -643,6 +721,106 @@ impl Node {
         }
     }
 
+    /// The momentum this node's coupling has made (`J`, `partition::momentum`), sent
+    /// with its every message; `None` where the coupling keeps no account.
+    pub fn momentum_made(&self) -> Option<Vector3<f64>> {
+        self.momentum.as_ref().map(|m| m.ledger.own())
+    }
+
+    /// Node `from`'s `J` as of its sample time `sent`.
+    pub fn receive_momentum(&mut self, from: usize, sent: SimTime, made: Vector3<f64>) {
+        if let Some(m) = &mut self.momentum {
+            m.ledger.receive(from, sent, made);
+        }
+    }
+
+    /// Node `from` samples its border forces on own body `g` (global) at `t`: keeps the
+    /// impulse the port's forces have applied by then, to compare with the sender's
+    /// when the sample arrives.
+    pub fn snapshot_port(&mut self, g: usize, from: usize, t: SimTime) {
+        let Some(b) = self.local(g) else { return };
+        let Some(m) = &mut self.momentum else { return };
+        if let Some(p) = m
+            .incoming
+            .iter_mut()
+            .find(|p| p.body == b && p.from == from)
+        {
+            if p.history.back().is_none_or(|(s, _)| *s < t) {
+                p.history.push_back((t, p.applied));
+            }
+        }
+    }
+
+    /// Books, for the step at `t`, the impulse of the border forces this node applies
+    /// to its own bodies (each port's) and of the owner-side loads on its ghosts, and
+    /// keeps the ghosts' velocities at the step's start: a held force acts as
+    /// `F + Ḟ·(t_stage − t)`, whose stages average `F h + Ḟ h²/2` over RK4 and `F h`
+    /// over a single-stage step.
+    fn book_step_impulses(&mut self, t: SimTime, cap: SimTime) {
+        let Some(m) = &mut self.momentum else { return };
+        if !m.ports {
+            return;
+        }
+        let h = self.system.dt().as_secs_f64();
+        let half = if self.system.is_multistage() {
+            0.5 * h * h
+        } else {
+            0.0
+        };
+        for ((held, now), &p) in self
+            .held_forces
+            .iter()
+            .zip(&self.coupling.held_now)
+            .zip(&m.port_of)
+        {
+            m.incoming[p].applied += now.0 * h + held.value.rate_at(t, cap).0 * half;
+        }
+        for (k, load) in self.coupling.ghost_loads.iter().enumerate() {
+            let g = self.owned + k;
+            m.ghost_step[k] = (
+                self.state.v[g],
+                load.at(t, cap).0 * h + load.rate_at(t, cap).0 * half,
+            );
+        }
+    }
+
+    /// After the step: the impulse this node's links put on each ghost over it, its
+    /// momentum change less its owner-side load's impulse and gravity's.
+    pub fn book_ghost_impulses(&mut self) {
+        let Some(m) = &mut self.momentum else { return };
+        if !m.ports {
+            return;
+        }
+        let h = self.system.dt().as_secs_f64();
+        let gravity = self.system.gravity.unwrap_or_else(Vector3::zeros);
+        for (k, (v0, load)) in m.ghost_step.iter().enumerate() {
+            let mass = m.ghost_mass[k];
+            if self.system.mass.inv_mass[self.owned + k] == 0.0 {
+                continue;
+            }
+            let dv = self.state.v[self.owned + k] - v0;
+            m.ghost_impulse[k] += dv * mass - load - gravity * (mass * h);
+        }
+    }
+
+    /// Pushes this node's own bodies, in proportion to their masses, by the share of
+    /// the coupling's momentum that has come due, as a constant force over the step
+    /// (`partition::momentum`).
+    fn give_back_momentum(&mut self) {
+        let Some(m) = &mut self.momentum else {
+            return;
+        };
+        let ledger = &mut m.ledger;
+        let h = self.system.dt().as_secs_f64();
+        let due = ledger.due(h);
+        if due == Vector3::zeros() {
+            return;
+        }
+        for (b, w) in ledger.weights().iter().enumerate() {
+            self.system.extra_force[b] += due * (w / h);
+        }
+    }
+
     /// After a step in `hold` mode, puts every ghost back at its held state.
     pub fn restore_held_ghosts(&mut self) {
         if self.ghosts != GhostMode::Hold {
@@ -657,6 +835,57 @@ impl Node {
                 self.state.omega[g] = w;
             }
         }
+    }
+}
+
+/// Node `index`'s momentum account: one ledger slot per incoming port (an own body and
+/// the node sending held forces on it) and per line end that is not the link owner's;
+/// its ghosts' masses (order of `layout.ghosts`).
+fn momentum_account(
+    scenario: &Scenario,
+    layout: &Layout,
+    index: usize,
+    (held, lines): (&[HeldForce], &[LineEnd]),
+    ghosts: GhostMode,
+) -> MomentumAccount {
+    let mut incoming: Vec<IncomingPort> = Vec::new();
+    let mut port_of = Vec::with_capacity(held.len());
+    for h in held {
+        let p = incoming
+            .iter()
+            .position(|p| p.body == h.body && p.from == h.from)
+            .unwrap_or_else(|| {
+                incoming.push(IncomingPort {
+                    body: h.body,
+                    from: h.from,
+                    applied: Vector3::zeros(),
+                    history: Default::default(),
+                });
+                incoming.len() - 1
+            });
+        port_of.push(p);
+    }
+    let masses: Vec<f64> = scenario.bodies.iter().map(|b| b.mass).collect();
+    let ghost_count = layout.ghosts[index].len();
+    let mut slots = incoming.len();
+    let line_slot = lines
+        .iter()
+        .map(|e| {
+            (!e.owner_side).then(|| {
+                slots += 1;
+                slots - 1
+            })
+        })
+        .collect();
+    MomentumAccount {
+        ledger: MomentumLedger::new(index, layout, &masses, slots),
+        line_slot,
+        ports: ghosts == GhostMode::Integrate,
+        incoming,
+        port_of,
+        ghost_impulse: vec![Vector3::zeros(); ghost_count],
+        ghost_step: vec![(Vector3::zeros(), Vector3::zeros()); ghost_count],
+        ghost_mass: layout.ghosts[index].iter().map(|&g| masses[g]).collect(),
     }
 }
 

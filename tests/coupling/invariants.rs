@@ -161,8 +161,10 @@ fn the_undriven_thesis_net_keeps_its_momentum_and_energy_under_the_default() {
     // partitioned run may differ from it by a bounded momentum in flight (the border
     // forces' impulse over one age) but must neither drift nor drain: kinetic energy
     // change within 2 % above and 5 % below the monolithic run's change. Momentum
-    // within 1 kg·m/s of the monolithic run's at every step of 2–6 s holds at 1 ms; at
-    // 5, 10 and 20 ms the impulse in flight swings further (measured in
+    // within 1 kg·m/s of the monolithic run's at every step of 2–6 s: the coupling's
+    // momentum account (`partition::momentum`) gives back what the predicted forces
+    // missed and the brake took, up to the impulse of the reports in flight; that holds
+    // at 1, 5 and 10 ms, and at 20 ms the swing between reports is larger (measured in
     // docs/method.md), so the test asserts it where it holds and prints the rest.
     let (mono, _) = run(&net("mono", 0.001, Some(2.0), 6.0, [0.0; 3]));
     let (k2, k6) = (2000, 6000);
@@ -186,7 +188,7 @@ fn the_undriven_thesis_net_keeps_its_momentum_and_energy_under_the_default() {
             100.0 * drift,
             100.0 * drift_mono
         );
-        if tau == 0.001 {
+        if tau <= 0.010 {
             assert!(worst <= 1.0, "τ = {tau}: momentum off by {worst} kg·m/s");
         }
         assert!(
@@ -420,4 +422,47 @@ fn a_free_spinning_ring_keeps_its_angular_momentum_and_energy() {
             );
         }
     }
+}
+
+#[test]
+fn the_momentum_the_brake_takes_is_given_back_and_its_energy_stays_removed() {
+    // A 0.01 J tank at 10 ms: the passivity brake works hard on the undriven net (it
+    // removes energy, asserted below, so the test would pass vacuously without it).
+    // Its force −c (v − V) alone takes momentum; the account gives it back as a
+    // uniform push. Both ways: energy removed (the brake's own figure, 40 J measured)
+    // and the momentum kept on average.
+    let mut v = net("passive", 0.01, Some(2.0), 6.0, [0.0; 3]);
+    v["partition"]["coupling"] = json!({"scheme": "passive", "tank": 0.01});
+    let s = parse_str(&v.to_string(), "<test>").expect("scenario");
+    let mut inv = Invariants {
+        masses: s.bodies.iter().map(|b| b.mass).collect(),
+        ..Invariants::default()
+    };
+    let mut world = CoSim::new(&s);
+    world.run_to_end(&mut inv).expect("bounded");
+    let dissipated: f64 = world
+        .nodes()
+        .iter()
+        .map(|n| n.port_energy().dissipated)
+        .sum();
+    let (mono, _) = run(&net("mono", 0.001, Some(2.0), 6.0, [0.0; 3]));
+    // The brake works in bursts, and a burst's impulse is given back over the push
+    // time once its reports arrive: the error swings (up to 2.3 kg·m/s measured) but
+    // does not accumulate: 0.34 kg·m/s on average over 2–6 s and 0.51 over 5–6 s
+    // (measured), where the brake's impulse alone would have stayed in it.
+    let errors: Vec<f64> = (2000..=6000)
+        .map(|k| (inv.momentum[k] - mono.momentum[k]).norm())
+        .collect();
+    let mean = errors.iter().sum::<f64>() / errors.len() as f64;
+    let last_second = errors[3000..].iter().sum::<f64>() / 1001.0;
+    eprintln!(
+        "brake dissipated {dissipated:.2} J; momentum off by {mean:.3} kg·m/s on average \
+         over 2–6 s, {last_second:.3} over 5–6 s"
+    );
+    assert!(dissipated > 10.0, "the brake removed only {dissipated} J");
+    assert!(mean <= 0.5, "momentum off by {mean} kg·m/s on average");
+    assert!(
+        last_second <= 1.0,
+        "momentum off by {last_second} kg·m/s over 5–6 s"
+    );
 }

@@ -334,7 +334,7 @@ fn lost_tdma_frames_never_let_the_passive_coupling_give_more_than_its_tanks() {
     // 20 Mbit/s take 138 µs).
     let mut v = thesis(3.0, "default", "space", 0.005);
     v["network"] = json!({"kind": "tdma", "slot": 0.0002, "cycle": 0.005, "guard": 0.00002,
-                          "link_rate": 20e6, "header_bytes": 26, "drift_ppm": 80000.0});
+                          "link_rate": 25e6, "header_bytes": 26, "drift_ppm": 80000.0});
     let (world, w, error) = run(&v, &[]);
     let lost = world.tdma().expect("a tdma world").network().lost();
     let ports: usize = world.nodes().iter().map(|n| n.bodies.len() - n.owned).sum();
@@ -363,7 +363,7 @@ fn lost_tdma_frames_never_let_transmission_lines_give_energy() {
     // goes slack past the 1 m bound (measured), which the run reports as divergence.
     let mut v = thesis(3.0, "default", "space", 0.05);
     v["network"] = json!({"kind": "tdma", "slot": 0.0002, "cycle": 0.005, "guard": 0.00002,
-                          "link_rate": 20e6, "header_bytes": 26, "drift_ppm": 80000.0});
+                          "link_rate": 25e6, "header_bytes": 26, "drift_ppm": 80000.0});
     let (world, w, error) = run(&v, &[]);
     let lost = world.tdma().expect("a tdma world").network().lost();
     let work: f64 = world.nodes().iter().map(|n| n.line_work()).sum();

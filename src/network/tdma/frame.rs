@@ -71,18 +71,28 @@ pub fn broadcast_fragments(entries: usize, per: Option<usize>) -> usize {
     }
 }
 
+/// Number of `f64` values of a sender's momentum account (`partition::momentum`),
+/// carried once per frame under a predicting coupling.
+pub const MOMENTUM_FLOATS: usize = 3;
+
 /// Number of `f64` values a route puts on the wire per transfer (the same counts as
 /// [`crate::network::Payload::floats`]).
 /// A state is position, velocity and the owner-side force (9 values; 19 with
 /// orientation, angular velocity and torque); a force is 3 values (6 with the torque);
-/// a coupling that sends rates adds one rate per force and torque value, and the
-/// `passive` one its energy report (one value).
+/// a coupling that sends rates adds one rate per force and torque value and, on a
+/// force, the impulse on the sender's ghost (three values), and the `passive` one its
+/// energy report (one value). Such a coupling's frame also carries its sender's
+/// momentum account once ([`MOMENTUM_FLOATS`]).
 pub fn floats_per_route(kind: DataKind, rigid: bool, coupling: Coupling, lines: usize) -> usize {
     // A transmission line's sample: wave and window length, and on a force route the
     // anchor's position and velocity (a state route's receiver has them from the state
     // it carries: the same values).
+    // A predicting coupling: a force also carries the impulse the sender's links put on
+    // its ghost (three values, `partition::momentum`).
+    let impulse = if coupling.predicts() { 3 } else { 0 };
     if kind == DataKind::Force && lines > 0 {
-        return 8;
+        // Under a predicting coupling with the owner end's impulse.
+        return 8 + impulse;
     }
     // An FMU connection carries its one value.
     if kind == DataKind::Signal {
@@ -98,7 +108,8 @@ pub fn floats_per_route(kind: DataKind, rigid: bool, coupling: Coupling, lines: 
     };
     let rates = if coupling.predicts() { loads } else { 0 };
     let energy = usize::from(coupling.tank().is_some());
-    base + rates + energy + lines * 2
+    let impulse = if kind == DataKind::Force { impulse } else { 0 };
+    base + rates + energy + impulse + lines * 2
 }
 
 /// The sending TDMA nodes of each channel (sorted, without repeats), from its routes.
@@ -158,7 +169,8 @@ impl FrameSizes {
     }
 
     /// The frames of a scene's channels: each route adds [`floats_per_route`] values
-    /// to the frame of its sender (TDMA node) on its channel.
+    /// to the frame of its sender (TDMA node) on its channel, and a predicting
+    /// coupling's frame its sender's momentum account ([`MOMENTUM_FLOATS`]).
     pub fn from_channels(
         channels: &[Channel],
         rigid: bool,
@@ -173,9 +185,14 @@ impl FrameSizes {
                     floats_per_route(r.kind, rigid, coupling, lines(r));
             }
         }
+        let account = if coupling.predicts() {
+            MOMENTUM_FLOATS
+        } else {
+            0
+        };
         let mut sizes = FrameSizes::new(header_bytes);
         for ((sender, channel), n) in floats {
-            sizes.set(sender, channel, n);
+            sizes.set(sender, channel, n + account);
         }
         sizes
     }
@@ -298,16 +315,19 @@ mod tests {
         assert_eq!(floats_per_route(DataKind::State, true, r, 0), 19);
         assert_eq!(floats_per_route(DataKind::Force, false, r, 0), 3);
         assert_eq!(floats_per_route(DataKind::Force, true, r, 0), 6);
+        // A predicting coupling's force also carries the impulse on the sender's ghost
+        // (3 values).
         assert_eq!(floats_per_route(DataKind::State, false, p, 0), 12);
         assert_eq!(floats_per_route(DataKind::State, true, p, 0), 25);
-        assert_eq!(floats_per_route(DataKind::Force, false, p, 0), 6);
-        assert_eq!(floats_per_route(DataKind::Force, true, p, 0), 12);
+        assert_eq!(floats_per_route(DataKind::Force, false, p, 0), 9);
+        assert_eq!(floats_per_route(DataKind::Force, true, p, 0), 15);
         assert_eq!(floats_per_route(DataKind::State, false, e, 0), 13);
-        assert_eq!(floats_per_route(DataKind::Force, true, e, 0), 13);
-        // A line: 2 values more per line on a state route; its own sample on a force
-        // route.
+        assert_eq!(floats_per_route(DataKind::Force, true, e, 0), 16);
+        // A line: 2 values more per line on a state route; its own sample (and the
+        // owner end's impulse) on a force route.
         assert_eq!(floats_per_route(DataKind::State, false, e, 2), 17);
-        assert_eq!(floats_per_route(DataKind::Force, false, e, 1), 8);
+        assert_eq!(floats_per_route(DataKind::Force, false, e, 1), 11);
+        assert_eq!(floats_per_route(DataKind::Force, false, r, 1), 8);
     }
 
     #[test]

@@ -75,10 +75,38 @@ impl Node {
         out
     }
 
-    /// A far end's sample taken at `sent`, applied from `now`.
+    /// A far end's sample taken at `sent`, applied from `now`. At the end that is not
+    /// the link owner's, the owner end's impulse as of `sent` and this end's then are
+    /// the momentum the line has made (`partition::momentum`).
     pub(super) fn receive_line(&mut self, sent: SimTime, now: SimTime, s: &LineSample) {
-        if let Some(e) = self.lines.iter_mut().find(|e| e.link == s.link) {
-            e.receive(sent, now, s);
+        let Some(k) = self.lines.iter().position(|e| e.link == s.link) else {
+            return;
+        };
+        let e = &mut self.lines[k];
+        e.receive(sent, now, s);
+        let slot = self.momentum.as_ref().and_then(|m| m.line_slot[k]);
+        let Some(slot) = slot else { return };
+        let Some(&(_, own)) = e.impulse_history.iter().find(|(t, _)| *t == sent) else {
+            return;
+        };
+        while e.impulse_history.front().is_some_and(|(t, _)| *t <= sent) {
+            e.impulse_history.pop_front();
+        }
+        if let Some(m) = &mut self.momentum {
+            m.ledger.port(slot, own + s.impulse);
+        }
+    }
+
+    /// The owner end of line `l` (global link) samples it at `t`: this node's end
+    /// keeps its impulse of that time, to compare when the sample arrives.
+    pub fn snapshot_line(&mut self, l: usize, t: SimTime) {
+        if self.momentum.is_none() {
+            return;
+        }
+        if let Some(e) = self.lines.iter_mut().find(|e| e.link == l && !e.owner_side) {
+            if e.impulse_history.back().is_none_or(|(s, _)| *s < t) {
+                e.impulse_history.push_back((t, e.impulse));
+            }
         }
     }
 

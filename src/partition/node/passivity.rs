@@ -117,6 +117,9 @@ impl Node {
         }
         let c = excess * fraction / speed2;
         self.system.extra_force[b] -= v * c;
+        if let Some(m) = &mut self.momentum {
+            m.ledger.brake(-v * (c * self.system.dt().as_secs_f64()));
+        }
         if rigid {
             self.system.extra_torque[b] -= w * c;
         }
