@@ -775,7 +775,7 @@ impl CoSim {
             channel: c,
             sent: t,
             payload,
-            momentum: from.momentum_made(),
+            momentum: from.momentum_made(t),
         })
     }
 

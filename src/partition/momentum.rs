@@ -62,8 +62,9 @@ pub struct MomentumLedger {
     known: Vec<(SimTime, Vector3<f64>)>,
     /// What this node's brake has applied [N·s].
     braked: Vector3<f64>,
-    /// Per incoming port: the momentum it made as of its newest force sample [N·s].
-    ports: Vec<Vector3<f64>>,
+    /// Per incoming port: the momentum it made as of its newest force sample, booked
+    /// for the steps from `.1` on, and the value before that [N·s].
+    ports: Vec<(Vector3<f64>, SimTime, Vector3<f64>)>,
     /// The push applied to this node's bodies so far [N·s].
     applied: Vector3<f64>,
     /// Each own body's share of the node's push (its mass over the node's), in the
@@ -100,7 +101,7 @@ impl MomentumLedger {
             shares,
             known: vec![(SimTime::ZERO, Vector3::zeros()); layout.nodes],
             braked: Vector3::zeros(),
-            ports: vec![Vector3::zeros(); ports],
+            ports: vec![(Vector3::zeros(), SimTime::ZERO, Vector3::zeros()); ports],
             applied: Vector3::zeros(),
         }
     }
@@ -115,14 +116,34 @@ impl MomentumLedger {
         self.braked += impulse;
     }
 
-    /// Sets the momentum incoming port `p` has made, as of its newest sample [N·s].
-    pub fn port(&mut self, p: usize, made: Vector3<f64>) {
-        self.ports[p] = made;
+    /// Sets the momentum incoming port `p` has made, as of its newest sample, for the
+    /// steps from `from` (the node's next step) on [N·s].
+    pub fn port(&mut self, p: usize, made: Vector3<f64>, from: SimTime) {
+        let entry = &mut self.ports[p];
+        if from > entry.1 {
+            entry.2 = entry.0;
+            entry.1 = from;
+        }
+        entry.0 = made;
     }
 
-    /// This node's `J`, for its messages [N·s].
+    /// This node's `J` now [N·s].
     pub fn own(&self) -> Vector3<f64> {
-        self.ports.iter().sum::<Vector3<f64>>() + self.braked
+        self.ports.iter().map(|p| p.0).sum::<Vector3<f64>>() + self.braked
+    }
+
+    /// This node's `J` as the state of step time `t` carries it, for a message sampled
+    /// at `t`: a port booked for the steps from `t` on is counted at its previous value,
+    /// so the message is the same whether the channel samples before or after that
+    /// booking's delivery at `t` (an ideal channel samples at the boundary, a TDMA
+    /// frame between boundaries) [N·s].
+    pub fn own_at(&self, t: SimTime) -> Vector3<f64> {
+        let ports: Vector3<f64> = self
+            .ports
+            .iter()
+            .map(|&(now, from, before)| if from < t { now } else { before })
+            .sum();
+        ports + self.braked
     }
 
     /// Node `from`'s `J` as of sample time `sent` (reports may arrive out of order: the
@@ -188,7 +209,7 @@ mod tests {
             .collect();
         // Node 0's brake takes 6 N·s, node 1's port made 15 N·s and its brake took 3.
         nodes[0].brake(Vector3::new(6.0, 0.0, 0.0));
-        nodes[1].port(0, Vector3::new(15.0, 0.0, 0.0));
+        nodes[1].port(0, Vector3::new(15.0, 0.0, 0.0), SimTime::ZERO);
         nodes[1].brake(Vector3::new(-3.0, 0.0, 0.0));
         let now: Vec<Vector3<f64>> = nodes.iter_mut().map(|n| n.due(1.0)).collect();
         // Before any report, each node gives back its own share of its own account:
@@ -206,7 +227,7 @@ mod tests {
         let total: Vector3<f64> = now.iter().chain(&later).sum();
         assert!((total.x + 18.0).abs() < 1e-12, "given back {total}");
         // A port's account is replaced, not added: a newer sample of the same port.
-        nodes[1].port(0, Vector3::new(10.0, 0.0, 0.0));
+        nodes[1].port(0, Vector3::new(10.0, 0.0, 0.0), SimTime::ZERO);
         assert!((nodes[1].own().x - 7.0).abs() < 1e-12);
         // A stale report does not roll back, and nothing is given twice.
         nodes[0].receive(1, SimTime::ZERO, Vector3::zeros());

@@ -534,7 +534,7 @@ impl Node {
                 body,
                 impulse,
             } => {
-                self.receive_port_impulse(from, sent, *body, *impulse);
+                self.receive_port_impulse(from, (sent, state_time), *body, *impulse);
                 if let Some(g) = self.local(*body) {
                     if let Some(p) = self
                         .coupling
@@ -575,13 +575,14 @@ impl Node {
         }
     }
 
-    /// A force sample of the port (own body `g` global, node `from`) taken at `sent`
-    /// says the sender's links had put `impulse` on their ghost of `g` by then: the port
-    /// has made the difference to what this node had applied by then.
+    /// A force sample of the port (own body `g` global, node `from`) taken at `sent`,
+    /// delivered while the node's state is that of `state_time`, says the sender's links
+    /// had put `impulse` on their ghost of `g` by then: the port has made the difference
+    /// to what this node had applied by then.
     fn receive_port_impulse(
         &mut self,
         from: usize,
-        sent: SimTime,
+        (sent, state_time): (SimTime, SimTime),
         g: usize,
         impulse: Vector3<f64>,
     ) {
@@ -604,7 +605,7 @@ impl Node {
         while port.history.front().is_some_and(|(t, _)| *t <= sent) {
             port.history.pop_front();
         }
-        m.ledger.port(p, applied - impulse);
+        m.ledger.port(p, applied - impulse, state_time);
     }
 
     /// The owner of global body `g` samples it for this node at `t` (the message leaves
@@ -721,10 +722,11 @@ impl Node {
         }
     }
 
-    /// The momentum this node's coupling has made (`J`, `partition::momentum`), sent
-    /// with its every message; `None` where the coupling keeps no account.
-    pub fn momentum_made(&self) -> Option<Vector3<f64>> {
-        self.momentum.as_ref().map(|m| m.ledger.own())
+    /// The momentum this node's coupling has made (`J`, `partition::momentum`) as the
+    /// state of step time `t` carries it, sent with its every message sampled at `t`;
+    /// `None` where the coupling keeps no account.
+    pub fn momentum_made(&self, t: SimTime) -> Option<Vector3<f64>> {
+        self.momentum.as_ref().map(|m| m.ledger.own_at(t))
     }
 
     /// Node `from`'s `J` as of its sample time `sent`.

@@ -93,7 +93,7 @@ impl Node {
             e.impulse_history.pop_front();
         }
         if let Some(m) = &mut self.momentum {
-            m.ledger.port(slot, own + s.impulse);
+            m.ledger.port(slot, own + s.impulse, now);
         }
     }
 
