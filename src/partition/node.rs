@@ -741,7 +741,10 @@ impl Node {
     /// when the sample arrives.
     pub fn snapshot_port(&mut self, g: usize, from: usize, t: SimTime) {
         let Some(b) = self.local(g) else { return };
-        let Some(m) = &mut self.momentum else { return };
+        // Without integrating ghosts no port is booked, and nothing is kept for one.
+        let Some(m) = self.momentum.as_mut().filter(|m| m.ports) else {
+            return;
+        };
         if let Some(p) = m
             .incoming
             .iter_mut()
