@@ -757,7 +757,8 @@ impl Node {
     }
 
     /// Books, for the step at `t`, the impulse of the border forces this node applies
-    /// to its own bodies (each port's) and of the owner-side loads on its ghosts, and
+    /// to its own bodies (each port's) and of the owner-side loads on its ghosts (after
+    /// [`Node::stage_rates`]), and
     /// keeps the ghosts' velocities at the step's start: a held force acts as
     /// `F + Ḟ·(t_stage − t)`, whose stages average `F h + Ḟ h²/2` over RK4 and `F h`
     /// over a single-stage step.
@@ -780,12 +781,13 @@ impl Node {
         {
             m.incoming[p].applied += now.0 * h + held.value.rate_at(t, cap).0 * half;
         }
-        for (k, load) in self.coupling.ghost_loads.iter().enumerate() {
+        // A ghost's extra force is its owner-side load, set (with its stage rate on a
+        // multi-stage step) earlier in `prepare_step`.
+        let rate = &self.system.extra_rate.force;
+        for (k, step) in m.ghost_step.iter_mut().enumerate() {
             let g = self.owned + k;
-            m.ghost_step[k] = (
-                self.state.v[g],
-                load.at(t, cap).0 * h + load.rate_at(t, cap).0 * half,
-            );
+            let r = rate.get(g).copied().unwrap_or_else(Vector3::zeros);
+            *step = (self.state.v[g], self.system.extra_force[g] * h + r * half);
         }
     }
 
