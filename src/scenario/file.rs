@@ -726,8 +726,8 @@ pub struct PartitionFile {
     #[serde(default)]
     pub coupling: CouplingFile,
     /// Owners of chosen border links, overriding the default rule (the thesis ring for
-    /// the 4-node quadrants, else the node of the link's body that comes first in file
-    /// order); default none.
+    /// the 4-node quadrants, else the node of the body with more other constraints per
+    /// kilogram, else the node of the lower-numbered body); default none.
     #[serde(default)]
     pub link_owners: Vec<LinkOwnerFile>,
 }

@@ -179,6 +179,38 @@ fn the_16_node_scene_stays_bounded_under_the_default_coupling() {
     }
 }
 
+/// The shipped 100 kg / 0.01 kg grid (`scenarios/mechanisms/grid16_mass_ratio.json`)
+/// under the default, latency = τ, against its own monolithic run: where a light body
+/// received an extrapolated force from a heavy one (owned by the heavy body's node) the
+/// default diverged from 8 ms. Every border link now belongs to its light body's node;
+/// the bound is the stabilizer's boundary layer ε (0.1 m), and the monolithic run's own
+/// max |w| is 0.022 m.
+#[test]
+fn the_mass_ratio_grid_stays_in_the_boundary_layer_under_the_default_up_to_20_ms() {
+    let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("scenarios/mechanisms/grid16_mass_ratio.json");
+    let base: Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).expect("scene")).expect("json");
+    let epsilon = base["stabilizer"]["epsilon"].as_f64().expect("epsilon");
+    let (_, m, error) = run(&monolithic(&base), &[0, 15]);
+    assert!(error.is_none(), "monolithic: {error:?}");
+    for tau in [0.005, 0.010, 0.020] {
+        let mut v = base.clone();
+        for c in v["channels"].as_array_mut().expect("channels") {
+            c["tau"] = json!(tau);
+            c["latency"] = json!(tau);
+        }
+        let (_, p, error) = run(&v, &[0, 15]);
+        let e = rms(&p, &m);
+        eprintln!(
+            "τ = {tau}: max |w| {:.4} m (monolithic {:.4}), RMS error {e:.2e} m",
+            p.max_w, m.max_w
+        );
+        assert!(error.is_none(), "τ = {tau}: {error:?}");
+        assert!(p.max_w < epsilon, "τ = {tau}: max |w| {}", p.max_w);
+    }
+}
+
 // ---------------------------------------------------------------------------------
 // Convergence in τ
 // ---------------------------------------------------------------------------------

@@ -44,17 +44,33 @@ pub(super) fn partition(
             ))
         }
     };
+    let constraints = constraint_counts(bodies.len(), links);
     let mut link_owner: Vec<usize> = links
         .iter()
         .map(|l| {
-            // The general rule names the lower-numbered body (by id, not by position in
-            // the file: `bodies` may list ids in any order).
+            let (na, nb) = (node_of[l.a], node_of[l.b]);
+            if na != nb && !ring {
+                // Outside the thesis ring: a border link's far body (the one that is
+                // not its owner's) is both the owner's ghost and the body that feels the
+                // link's force as a sample extrapolated over its age. The owner is the
+                // side whose body is driven hardest by forces only its own node
+                // computes: its other constraints per kilogram. Then the far body is the
+                // better-predicted ghost, and an error in the force it receives makes
+                // the smaller acceleration (method §3 has the scenes that decided it).
+                let drive = |b: usize| (constraints[b] - 1) as f64 / bodies[b].mass;
+                let (da, db) = (drive(l.a), drive(l.b));
+                if da != db {
+                    return if da > db { na } else { nb };
+                }
+            }
+            // A tie: the general rule names the lower-numbered body (by id, not by
+            // position in the file: `bodies` may list ids in any order).
             let lower = if bodies[l.a].id <= bodies[l.b].id {
                 l.a
             } else {
                 l.b
             };
-            default_owner(node_of[l.a], node_of[l.b], node_of[lower], ring)
+            default_owner(na, nb, node_of[lower], ring)
         })
         .collect();
     overrides(&p.link_owners, &node_of, bodies, links, &mut link_owner)?;
@@ -279,6 +295,23 @@ fn default_owner(a: usize, b: usize, lower: usize, ring: bool) -> usize {
     } else {
         lower
     }
+}
+
+/// How many constraints act on each body: every distance link and every joint once
+/// (a joint's rows are one constraint), world anchors included.
+fn constraint_counts(bodies: usize, links: &[LinkSpec]) -> Vec<usize> {
+    let mut count = vec![0; bodies];
+    for l in links {
+        // Only a joint's first row counts it.
+        if l.joint.is_some_and(|(_, row)| row > 0) {
+            continue;
+        }
+        count[l.a] += 1;
+        if !l.world && l.b != l.a {
+            count[l.b] += 1;
+        }
+    }
+    count
 }
 
 /// Applies `partition.link_owners`: border links only, to one of their two nodes, each

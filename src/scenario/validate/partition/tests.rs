@@ -185,20 +185,77 @@ fn one_node_needs_no_channels_and_overrides_apply_to_quadrants() {
 
 #[test]
 fn the_general_rule_goes_by_body_id_not_by_file_order() {
-    // Bodies listed as 5 then 2, the link written 5–2: body 2 is the lower-numbered
-    // one, so its node (node 1 = [2]) owns the border link, whatever the file order.
+    // Bodies listed as 5 then 2, the link written 5–2 (and 9–7 beside it), equal
+    // masses and one constraint each: body 2 is the lower-numbered one, so its node
+    // (node 1 = [2]) owns the border link, whatever the file order.
     let text = r#"{"name": "p", "seed": 1, "duration": 1.0, "dt": 0.001,
         "model": {
           "bodies": [{"id": 5, "mass": 1.0, "size": 0.2, "position": [1.8, 0, 0]},
                      {"id": 2, "mass": 1.0, "size": 0.2, "position": [0, 0, 0]},
-                     {"id": 9, "mass": 1.0, "size": 0.2, "position": [3.6, 0, 0]}],
-          "links": [{"a": 5, "b": 2}, {"a": 9, "b": 5}]},
-        "partition": {"nodes": [[2], [5], [9]]},
+                     {"id": 9, "mass": 1.0, "size": 0.2, "position": [3.6, 0, 0]},
+                     {"id": 7, "mass": 1.0, "size": 0.2, "position": [5.4, 0, 0]}],
+          "links": [{"a": 5, "b": 2}, {"a": 9, "b": 7}]},
+        "partition": {"nodes": [[2], [5], [9], [7]]},
         "channels": [{"name": "c", "tau": 0.001}]}"#;
     let s = match parse_str(text, "test.json") {
         Ok(s) => s,
         Err(e) => panic!("expected a valid scenario, got: {e}"),
     };
     assert_eq!(owner(&s, 5, 2), 1, "5–2 belongs to body 2's node");
-    assert_eq!(owner(&s, 9, 5), 2, "9–5 belongs to body 5's node");
+    assert_eq!(owner(&s, 9, 7), 4, "9–7 belongs to body 7's node");
+}
+
+/// A chain of three bodies on three nodes with the given masses.
+fn chain3(masses: [f64; 3]) -> Scenario {
+    let bodies: Vec<String> = masses
+        .iter()
+        .enumerate()
+        .map(|(i, m)| {
+            format!(
+                r#"{{"id": {}, "mass": {m}, "size": 0.2, "position": [{}, 0, 0]}}"#,
+                i + 1,
+                i as f64 * 1.8
+            )
+        })
+        .collect();
+    let text = format!(
+        r#"{{"name": "c", "seed": 1, "duration": 1.0, "dt": 0.001,
+            "model": {{"bodies": [{}], "links": [{{"a": 1, "b": 2}}, {{"a": 2, "b": 3}}]}},
+            "partition": {{"nodes": [[1], [2], [3]]}},
+            "channels": [{{"name": "all", "tau": 0.005}}]}}"#,
+        bodies.join(", ")
+    );
+    parse_str(&text, "chain.json").unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[test]
+fn a_border_link_belongs_to_the_side_driven_hardest_by_its_other_constraints() {
+    // Equal masses: the end body (no other constraint) is the far side, so the middle
+    // body's node owns both links, as the lower-id rule gives for 1–2 and not for 2–3.
+    let s = chain3([1.0, 1.0, 1.0]);
+    assert_eq!((owner(&s, 1, 2), owner(&s, 2, 3)), (2, 2));
+    // A light middle body between heavy ends owns both links; a heavy middle body
+    // still owns them (1 other constraint per 100 kg against none).
+    let s = chain3([100.0, 0.01, 100.0]);
+    assert_eq!((owner(&s, 1, 2), owner(&s, 2, 3)), (2, 2));
+    let s = chain3([0.01, 100.0, 0.01]);
+    assert_eq!((owner(&s, 1, 2), owner(&s, 2, 3)), (2, 2));
+    // Every border link of the alternating 100 kg / 0.01 kg grid is its light body's.
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("scenarios/mechanisms/grid16_mass_ratio.json"),
+    )
+    .expect("scene");
+    let s = parse_str(&text, "grid16_mass_ratio.json").expect("valid");
+    let p = s.partition.as_ref().unwrap();
+    let borders = border_links(&s);
+    assert_eq!(borders.len(), 8);
+    for (a, b, n) in borders {
+        let light = if s.bodies[a as usize - 1].mass < s.bodies[b as usize - 1].mass {
+            a
+        } else {
+            b
+        };
+        assert_eq!(n, p.node_of[light as usize - 1] + 1, "border link {a}–{b}");
+    }
 }
