@@ -43,13 +43,15 @@ use std::collections::VecDeque;
 /// far ends `A` of its border links to `B`), side 2 (`B`'s owner) applies the received
 /// border forces to `B`. Each side books the power `P = F·v + T·ω` it applies to its
 /// bodies every step: what its bodies give to the port is `taken`, what the port gives
-/// to them is `given`. Each side may give only what the other side has reported taken
-/// (`received`, cumulative, so a late or lost report only delays the credit) plus half
-/// the initial tank: `given ≤ received + tank/2`. Summed over both sides the coupling's
-/// net work on the bodies, `given₁ + given₂ − taken₁ − taken₂`, can then never exceed
-/// the tank, whatever the delay, jitter or loss. Where the predicted force would give
-/// more, a passivity controller removes the excess with a force against the body's
-/// velocity (it dissipates exactly the power the tank cannot pay).
+/// to them is `given`. The other side's `taken` is reported to it (`received`,
+/// cumulative, so a late or lost report only delays the credit). A node's sides share
+/// one account: together they may give only what their other sides have reported taken
+/// plus half of each port's tank, `Σ given ≤ Σ (received + tank/2)` over the node's
+/// sides. Summed over every node the coupling's net work on the bodies,
+/// `Σ given − Σ taken`, can then never exceed the tanks, whatever the delay, jitter or
+/// loss. Where the predicted forces would give more, a passivity controller removes the
+/// excess with forces against the giving bodies' velocities (it dissipates exactly the
+/// power the account cannot pay).
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PortAccount {
     /// Energy this side's bodies put into the port [J] (cumulative `∫max(−P, 0) dt`).
@@ -68,14 +70,14 @@ impl PortAccount {
         self.received + 0.5 * tank - self.given
     }
 
-    /// Books power `p` [W] applied over `dt` [s]; returns the power the tank allows
-    /// (`p` itself unless `p > 0` exceeds what is available).
-    pub fn book(&mut self, p: f64, dt: f64, tank: f64) -> f64 {
+    /// Books power `p` [W] applied over `dt` [s] of which the node's account pays the
+    /// fraction `keep` if `p > 0` (the rest is dissipated); returns the power applied.
+    pub fn book(&mut self, p: f64, dt: f64, keep: f64) -> f64 {
         if p <= 0.0 {
             self.taken -= p * dt;
             return p;
         }
-        let allowed = p.min((self.available(tank) / dt).max(0.0));
+        let allowed = p * keep;
         self.given += allowed * dt;
         self.dissipated += (p - allowed) * dt;
         allowed

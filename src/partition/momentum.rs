@@ -113,6 +113,11 @@ impl MomentumLedger {
         &self.weights
     }
 
+    /// What this node's brake has applied so far [N·s].
+    pub fn braked(&self) -> Vector3<f64> {
+        self.braked
+    }
+
     /// Books an impulse of this node's brake [N·s].
     pub fn brake(&mut self, impulse: Vector3<f64>) {
         self.braked += impulse;

@@ -48,8 +48,10 @@ struct CouplingState {
     port_forces: Vec<Vec<usize>>,
     /// Scratch: each held force's value at the current step (force, torque).
     held_now: Vec<(Vector3<f64>, Vector3<f64>)>,
-    /// Scratch (`passive`): (far end, power) of one ghost's border links.
-    end_powers: Vec<(usize, f64)>,
+    /// Scratch (`passive`): the power of each port side, `ports_in` then `ports_out`.
+    side_powers: Vec<f64>,
+    /// Scratch (`passive`): (ghost port, far end, power) of every border link's own end.
+    end_powers: Vec<(usize, usize, f64)>,
 }
 
 /// A ghost's last received state (for the `hold` mode).
@@ -227,6 +229,7 @@ impl Node {
             ports_in: Vec::new(),
             port_forces: Vec::new(),
             held_now: Vec::new(),
+            side_powers: Vec::new(),
             end_powers: Vec::new(),
         };
         let mut coupling = coupling;
@@ -727,6 +730,13 @@ impl Node {
     /// `None` where the coupling keeps no account.
     pub fn momentum_made(&self, t: SimTime) -> Option<Vector3<f64>> {
         self.momentum.as_ref().map(|m| m.ledger.own_at(t))
+    }
+
+    /// The impulse this node's passivity brake has applied so far (`None` where the
+    /// coupling keeps no momentum account): what the net's momentum would be missing
+    /// without the account's push.
+    pub fn brake_impulse(&self) -> Option<Vector3<f64>> {
+        self.momentum.as_ref().map(|m| m.ledger.braked())
     }
 
     /// Node `from`'s `J` as of its sample time `sent`.

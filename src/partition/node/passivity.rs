@@ -21,12 +21,23 @@ impl Node {
         sum
     }
 
-    /// `passive`: books each port's power for the step at `t` and, where a side would
-    /// give its bodies more than its account holds, adds the passivity controller's
-    /// force `−c v` (and torque `−c ω`) that removes exactly the excess.
+    /// `passive`: books each port side's power for the step and, where this node's
+    /// sides together would give their bodies more than the node's account holds, adds
+    /// the passivity controller's forces `−c v` (and torques `−c ω`) that remove exactly
+    /// the excess, every giving body the same fraction of its power.
+    ///
+    /// *Why one account per node*: a predictor's energy error differs in sign from port
+    /// to port. Per port, a port that gives more than it takes is braked once its tank
+    /// is spent while the energy another port takes more than it gives is lost, so the
+    /// brake drained the net one-sidedly (measured in method §3.1); pooled, the net's
+    /// guarantee is the same (`Σ given − Σ taken` never exceeds the tanks).
     pub(super) fn passivity(&mut self, tank: f64) {
         let h = self.system.dt().as_secs_f64();
         let rigid = self.state.is_rigid();
+        let mut sides = std::mem::take(&mut self.coupling.side_powers);
+        let mut ends = std::mem::take(&mut self.coupling.end_powers);
+        sides.clear();
+        ends.clear();
         // Side 2: the border forces this node applies to its own bodies, per port.
         for p in 0..self.coupling.ports_in.len() {
             let b = self.coupling.ports_in[p].0;
@@ -37,32 +48,55 @@ impl Node {
                 tq += dt;
             }
             let (v, w) = self.velocities(b);
-            let power = f.dot(&v) + if rigid { tq.dot(&w) } else { 0.0 };
-            let allowed = self.coupling.ports_in[p].2.book(power, h, tank);
-            self.damp(b, power - allowed, 1.0);
+            sides.push(f.dot(&v) + if rigid { tq.dot(&w) } else { 0.0 });
         }
-        // Side 1: this node's border links to each ghost, on their own-body ends (each
-        // end's power computed once, kept in a reused scratch list).
-        let mut ends = std::mem::take(&mut self.coupling.end_powers);
+        // Side 1: this node's border links to each ghost, on their own-body ends.
         for k in 0..self.coupling.ports_out.len() {
             let g = self.owned + k;
-            ends.clear();
-            ends.extend(
-                self.incident[g]
-                    .iter()
-                    .map(|&l| (self.far_end(l, g), self.end_power(l, g))),
-            );
-            let power: f64 = ends.iter().map(|e| e.1).sum();
-            let positive: f64 = ends.iter().map(|e| e.1.max(0.0)).sum();
-            let allowed = self.coupling.ports_out[k].book(power, h, tank);
-            if power > allowed && positive > 0.0 {
-                // Every giving end gives the same fraction less.
-                let fraction = (power - allowed) / positive;
-                for &(a, p_l) in ends.iter().filter(|e| e.1 > 0.0) {
-                    self.damp(a, p_l, fraction);
+            let first = ends.len();
+            for &l in &self.incident[g] {
+                ends.push((k, self.far_end(l, g), self.end_power(l, g)));
+            }
+            sides.push(ends[first..].iter().map(|e| e.2).sum());
+        }
+        let ins = self.coupling.ports_in.len();
+        let available: f64 = self
+            .coupling
+            .ports_in
+            .iter()
+            .map(|p| &p.2)
+            .chain(&self.coupling.ports_out)
+            .map(|a| a.available(tank))
+            .sum();
+        let giving: f64 = sides.iter().map(|p| p.max(0.0)).sum::<f64>() * h;
+        let keep = if giving > available.max(0.0) {
+            available.max(0.0) / giving
+        } else {
+            1.0
+        };
+        for (i, &power) in sides.iter().enumerate() {
+            let account = if i < ins {
+                &mut self.coupling.ports_in[i].2
+            } else {
+                &mut self.coupling.ports_out[i - ins]
+            };
+            account.book(power, h, keep);
+        }
+        if keep < 1.0 {
+            for (i, &power) in sides[..ins].iter().enumerate() {
+                let b = self.coupling.ports_in[i].0;
+                self.damp(b, power, 1.0 - keep);
+            }
+            // On side 1 only the giving ends of a giving port are braked.
+            for &(k, a, p_l) in &ends {
+                if sides[ins + k] > 0.0 && p_l > 0.0 {
+                    let positive: f64 =
+                        ends.iter().filter(|e| e.0 == k).map(|e| e.2.max(0.0)).sum();
+                    self.damp(a, p_l, sides[ins + k] * (1.0 - keep) / positive);
                 }
             }
         }
+        self.coupling.side_powers = sides;
         self.coupling.end_powers = ends;
     }
 
