@@ -5,10 +5,12 @@ pub mod cost;
 pub mod dsm;
 pub mod experiment;
 pub mod nelder_mead;
+pub mod paired;
 pub mod plant;
 pub mod problem;
 
 pub use cost::{CostMeter, Epoch};
 pub use dsm::{d_s_min, Dsm, DsmConfig, DsmError, DsmPhase, Feasible, SimplexError};
 pub use nelder_mead::{NelderMead, NelderMeadConfig, NelderMeadPhase};
+pub use paired::{Paired, Verdict};
 pub use plant::{Plant, WindowSink};

@@ -19,6 +19,7 @@ use rayon::prelude::*;
 
 use super::dsm::{Dsm, DsmConfig};
 use super::nelder_mead::{NelderMead, NelderMeadConfig};
+use super::paired::Paired;
 use super::plant::{Plant, WindowSink};
 use super::problem::Delays;
 use crate::error::{Error, Result};
@@ -75,7 +76,9 @@ pub struct Experiment {
 }
 
 impl Experiment {
-    /// Mean objective of a method over the windows where it was measured (finite).
+    /// Mean objective of a method over the windows where it was measured (finite): not
+    /// a comparison between methods, whose windows can differ ([`Experiment::paired`]
+    /// compares).
     pub fn mean(&self, name: &str, live_name: &str) -> Option<f64> {
         let values: Vec<f64> = self
             .windows
@@ -93,6 +96,32 @@ impl Experiment {
             .filter(|v| v.is_finite())
             .collect();
         (!values.is_empty()).then(|| values.iter().sum::<f64>() / values.len() as f64)
+    }
+
+    /// The objective of method `name` in every window, in time order (`NaN` where it
+    /// was not measured or its choice was infeasible).
+    pub fn objectives(&self, name: &str, live_name: &str) -> Vec<f64> {
+        self.windows
+            .iter()
+            .map(|w| {
+                if name == live_name {
+                    w.live.objective
+                } else {
+                    w.baselines
+                        .iter()
+                        .find(|b| b.name == name)
+                        .map_or(f64::NAN, |b| b.candidate.objective)
+                }
+            })
+            .collect()
+    }
+
+    /// Method `a` against method `b` over the windows where both were measured.
+    pub fn paired(&self, a: &str, b: &str, live_name: &str) -> Paired {
+        Paired::new(
+            &self.objectives(a, live_name),
+            &self.objectives(b, live_name),
+        )
     }
 
     /// Names of the baselines, in column order.

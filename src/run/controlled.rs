@@ -91,11 +91,21 @@ pub(super) fn summarize(world: &CoSim, exp: &Experiment, summary: &mut Value) {
     });
     let mut names = vec![live.to_string()];
     names.extend(exp.baseline_names());
-    for n in names {
-        if let Some(m) = exp.mean(&n, live) {
+    for n in &names {
+        if let Some(m) = exp.mean(n, live) {
             summary[format!("mean_cost_{n}")] = json!(m);
         }
     }
+    // The live method against each baseline over the windows where both were measured
+    // (method §5): what a ratio or a verdict may be read from.
+    let mut paired = serde_json::Map::new();
+    for n in &names[1..] {
+        let p = exp.paired(live, n, live);
+        let mut v = json!(p);
+        v["verdict"] = json!(p.verdict());
+        paired.insert(n.clone(), v);
+    }
+    summary["paired"] = Value::Object(paired);
 }
 
 fn step_series(label: String, exp: &Experiment, f: &dyn Fn(usize) -> f64) -> Series {

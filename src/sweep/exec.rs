@@ -417,6 +417,8 @@ fn expected(p: &Point, base_digest: &str) -> Record {
             divergence: None,
             mean_cost: None,
             mean_cost_by_method: Default::default(),
+            paired_ratio: Default::default(),
+            live_method: None,
             lost_frames: 0,
             channels: Vec::new(),
             bandwidth: None,

@@ -1,6 +1,7 @@
 //! Plots of a sweep: `cost_vs_<axis>.svg` (mean cost against the first numeric axis,
 //! and for controlled runs with a live DSM `dsm_over_grid_vs_<axis>.svg` and
-//! `dsm_over_no_opt_vs_<axis>.svg`, its mean cost over those baselines' in each run,
+//! `dsm_over_no_opt_vs_<axis>.svg`, its mean cost over those baselines' in each run over
+//! the windows where both were measured,
 //! one line per combination of the other axes' values under `factorial`, averaged over
 //! draw axes — those whose pointer is `/seed` — with min–max bars) and, with two
 //! or more axes, `cost_heatmap.svg` (mean cost over the first two axes; cells holding
@@ -86,22 +87,27 @@ fn diverged(r: &Record) -> bool {
     r.row.status != "ok"
 }
 
-/// The ratio of the DSM's mean cost to a baseline's in one run (NaN where either is
-/// missing).
+/// The DSM's cost over a baseline's in one run, as the ratio of their means over the
+/// windows where both were measured (NaN where the run's live method is not the DSM or
+/// the pair has no window).
 fn dsm_over(r: &Record, baseline: &str) -> f64 {
-    let get = |m: &str| r.row.mean_cost_by_method.get(m).copied().flatten();
-    match (get("dsm"), get(baseline)) {
-        (Some(d), Some(b)) => d / b,
-        _ => f64::NAN,
+    if r.row.live_method.as_deref() != Some("dsm") {
+        return f64::NAN;
     }
+    r.row
+        .paired_ratio
+        .get(baseline)
+        .copied()
+        .flatten()
+        .unwrap_or(f64::NAN)
 }
 
 /// Writes the plots of `records` (sorted by index) into `out`.
 pub fn write(out: &Path, plan: &Plan, records: &[Record]) -> Result<()> {
     cost_vs(out, plan, records, &Metric::COST)?;
-    // Controlled runs with a live DSM: its cost over the baselines' in the same run (the
-    // ratio compares methods on the same windows, where the costs themselves also move
-    // with each run's own trajectory).
+    // Controlled runs with a live DSM: its cost over the baselines' in the same run, on
+    // the windows where both were measured (the costs themselves also move with each
+    // run's own trajectory).
     for m in [Metric::DSM_OVER_GRID, Metric::DSM_OVER_NO_OPT] {
         if records.iter().any(|r| (m.value)(r).is_finite()) {
             cost_vs(out, plan, records, &m)?;

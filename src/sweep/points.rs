@@ -11,7 +11,8 @@ use crate::error::{Error, Result};
 
 /// `sweep.csv`'s fixed columns, in the groups it writes them ([`super::table`]): before
 /// the axes; after them (and `rep`); after `mean_cost_<method>`; last. With `rep` and
-/// the `mean_cost_` and `tau_` prefixes they are the names an axis may not take.
+/// the `mean_cost_`, `paired_ratio_` and `tau_` prefixes they are the names an axis may
+/// not take.
 pub const LEADING_COLUMNS: [&str; 2] = ["index", "point"];
 /// See [`LEADING_COLUMNS`].
 pub const STATUS_COLUMNS: [&str; 6] = [
@@ -36,6 +37,7 @@ fn reserved(name: &str) -> bool {
         .chain(&["rep", LOSS_COLUMN])
         .any(|&c| c == name)
         || name.starts_with("mean_cost_")
+        || name.starts_with("paired_ratio_")
         || name.starts_with("tau_")
 }
 

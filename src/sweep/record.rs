@@ -52,6 +52,15 @@ pub struct Row {
     pub mean_cost: Option<f64>,
     /// `mean_cost_<method>` of a controlled run, by method [m].
     pub mean_cost_by_method: BTreeMap<String, Option<f64>>,
+    /// A controlled run's live method against each baseline over the windows where
+    /// both were measured (`summary.json`'s `paired`): the ratio of their means, by
+    /// baseline. Empty for a run without a controller (and in records written before
+    /// the paired comparisons).
+    #[serde(default)]
+    pub paired_ratio: BTreeMap<String, Option<f64>>,
+    /// The live method of a controlled run (`controller.method`).
+    #[serde(default)]
+    pub live_method: Option<String>,
     /// Frames lost on a TDMA network (0 on ideal channels).
     pub lost_frames: u64,
     /// Per channel, in the run's order.
@@ -84,6 +93,20 @@ impl Row {
             .iter()
             .filter_map(|(k, v)| Some((k.strip_prefix("mean_cost_")?.to_string(), v.as_f64())))
             .collect();
+        let paired_ratio = obj
+            .get("paired")
+            .and_then(Value::as_object)
+            .map(|m| {
+                m.iter()
+                    .map(|(k, v)| (k.clone(), v.get("ratio").and_then(Value::as_f64)))
+                    .collect()
+            })
+            .unwrap_or_default();
+        let live_method = obj
+            .get("controller")
+            .and_then(|c| c.get("method"))
+            .and_then(Value::as_str)
+            .map(str::to_string);
         let mut channels = Vec::new();
         let mut bandwidth_sum = Some(0.0);
         for (i, c) in obj
@@ -131,6 +154,8 @@ impl Row {
             divergence,
             mean_cost: obj.get("mean_cost").and_then(Value::as_f64),
             mean_cost_by_method,
+            paired_ratio,
+            live_method,
             lost_frames: obj.get("lost_frames").and_then(Value::as_u64).unwrap_or(0),
             channels,
             bandwidth,

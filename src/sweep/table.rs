@@ -38,6 +38,10 @@ pub fn sweep_csv(plan: &Plan, records: &[Record]) -> String {
         .iter()
         .flat_map(|r| r.row.mean_cost_by_method.keys().map(String::as_str))
         .collect();
+    let paired: BTreeSet<&str> = records
+        .iter()
+        .flat_map(|r| r.row.paired_ratio.keys().map(String::as_str))
+        .collect();
     let mut channels: Vec<&str> = Vec::new();
     for r in records {
         for c in &r.row.channels {
@@ -53,6 +57,7 @@ pub fn sweep_csv(plan: &Plan, records: &[Record]) -> String {
     }
     header.extend(STATUS_COLUMNS.map(String::from));
     header.extend(methods.iter().map(|m| format!("mean_cost_{m}")));
+    header.extend(paired.iter().map(|m| format!("paired_ratio_{m}")));
     header.push(LOSS_COLUMN.into());
     for c in &channels {
         header.push(format!("tau_{c}_requested"));
@@ -82,6 +87,11 @@ pub fn sweep_csv(plan: &Plan, records: &[Record]) -> String {
             methods
                 .iter()
                 .map(|m| num(row.mean_cost_by_method.get(*m).copied().flatten())),
+        );
+        f.extend(
+            paired
+                .iter()
+                .map(|m| num(row.paired_ratio.get(*m).copied().flatten())),
         );
         f.push(row.lost_frames.to_string());
         for name in &channels {
@@ -130,6 +140,8 @@ mod tests {
                     .iter()
                     .map(|&(m, c)| (m.to_string(), Some(c)))
                     .collect::<BTreeMap<_, _>>(),
+                paired_ratio: BTreeMap::new(),
+                live_method: None,
                 lost_frames: 0,
                 channels: vec![ChannelRow {
                     name: channel.into(),

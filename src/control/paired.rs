@@ -1,0 +1,181 @@
+//! Paired comparisons of two methods over the same measurement windows (method §5).
+//!
+//! The cost of a window changes up to 2× from window to window with the load and the
+//! chaotic motion, while across delays it changes by about 10 %. A mean over one
+//! method's windows set against a mean over another's (a baseline is `NaN` in a window
+//! where its choice was infeasible) then compares the windows as much as the methods.
+//! Every comparison here is over the windows where both were measured: per window the
+//! difference `a − b`, its mean with a 95 % confidence interval (paired t), and the
+//! windows `a` won, with a two-sided sign test.
+
+use statrs::distribution::{ContinuousCDF, StudentsT};
+
+/// Method `a` against method `b` over the windows where both have a finite objective
+/// (lower is better).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Paired {
+    /// Windows where both were measured.
+    pub n: usize,
+    /// Windows left out: either method infeasible there, diverged or not measured.
+    pub excluded: usize,
+    /// Windows where `a` is lower.
+    pub wins: usize,
+    /// Windows where `a` is higher.
+    pub losses: usize,
+    /// Mean of `a` over the paired windows.
+    pub mean_a: f64,
+    /// Mean of `b` over the paired windows.
+    pub mean_b: f64,
+    /// `mean_a / mean_b`.
+    pub ratio: f64,
+    /// Mean of `a − b`.
+    pub mean_difference: f64,
+    /// 95 % confidence interval of the mean difference (paired t, `n − 1` degrees of
+    /// freedom); `None` below 2 windows.
+    pub ci95: Option<[f64; 2]>,
+    /// Two-sided sign test of wins against losses (ties left out): the probability of
+    /// a split at least this uneven if either method were as likely to win a window.
+    pub sign_test_p: f64,
+}
+
+/// What a paired comparison says.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// The interval lies below zero: `a` is lower.
+    Better,
+    /// The interval lies above zero: `a` is higher.
+    Worse,
+    /// The interval contains zero (or fewer than 2 windows).
+    NotSignificant,
+}
+
+impl Paired {
+    /// Compares `a` with `b` window by window (the two slices are per window, in the
+    /// same order; a non-finite value leaves its window out).
+    pub fn new(a: &[f64], b: &[f64]) -> Paired {
+        assert_eq!(a.len(), b.len(), "one value per window for each method");
+        let pairs: Vec<(f64, f64)> = a
+            .iter()
+            .zip(b)
+            .filter(|(x, y)| x.is_finite() && y.is_finite())
+            .map(|(&x, &y)| (x, y))
+            .collect();
+        let n = pairs.len();
+        let mean = |f: &dyn Fn(&(f64, f64)) -> f64| pairs.iter().map(f).sum::<f64>() / n as f64;
+        let (mean_a, mean_b) = if n == 0 {
+            (f64::NAN, f64::NAN)
+        } else {
+            (mean(&|p| p.0), mean(&|p| p.1))
+        };
+        let mean_difference = if n == 0 {
+            f64::NAN
+        } else {
+            mean(&|p| p.0 - p.1)
+        };
+        let ci95 = (n >= 2).then(|| {
+            let var = pairs
+                .iter()
+                .map(|p| (p.0 - p.1 - mean_difference).powi(2))
+                .sum::<f64>()
+                / (n - 1) as f64;
+            let t = StudentsT::new(0.0, 1.0, (n - 1) as f64)
+                .expect("ok: n − 1 ≥ 1 degrees of freedom")
+                .inverse_cdf(0.975);
+            let half = t * (var / n as f64).sqrt();
+            [mean_difference - half, mean_difference + half]
+        });
+        let wins = pairs.iter().filter(|p| p.0 < p.1).count();
+        let losses = pairs.iter().filter(|p| p.0 > p.1).count();
+        Paired {
+            n,
+            excluded: a.len() - n,
+            wins,
+            losses,
+            mean_a,
+            mean_b,
+            ratio: mean_a / mean_b,
+            mean_difference,
+            ci95,
+            sign_test_p: sign_test(wins, losses),
+        }
+    }
+
+    /// Better, worse or not significantly different at 95 %.
+    pub fn verdict(&self) -> Verdict {
+        match self.ci95 {
+            Some([_, hi]) if hi < 0.0 => Verdict::Better,
+            Some([lo, _]) if lo > 0.0 => Verdict::Worse,
+            _ => Verdict::NotSignificant,
+        }
+    }
+}
+
+/// Two-sided exact sign test: `P(min(W, L) ≤ min(w, l))` doubled (at most 1) for
+/// `W + L = w + l` fair coin flips. Written out here (a binomial tail in log space, so
+/// thousands of windows neither overflow nor lose the small tail) since it is ten lines.
+fn sign_test(wins: usize, losses: usize) -> f64 {
+    let n = wins + losses;
+    if n == 0 {
+        return 1.0;
+    }
+    let k = wins.min(losses);
+    let ln_choose = |n: usize, k: usize| -> f64 {
+        (1..=k)
+            .map(|i| ((n - k + i) as f64).ln() - (i as f64).ln())
+            .sum()
+    };
+    let tail: f64 = (0..=k)
+        .map(|i| (ln_choose(n, i) - n as f64 * std::f64::consts::LN_2).exp())
+        .sum();
+    (2.0 * tail).min(1.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_window_either_method_missed_leaves_the_pair_and_is_counted() {
+        let p = Paired::new(&[1.0, 2.0, f64::NAN, 4.0], &[2.0, f64::NAN, 1.0, 5.0]);
+        assert_eq!((p.n, p.excluded, p.wins, p.losses), (2, 2, 2, 0));
+        assert_eq!((p.mean_a, p.mean_b), (2.5, 3.5));
+        assert_eq!(p.mean_difference, -1.0);
+    }
+
+    #[test]
+    fn the_interval_is_the_paired_t_interval() {
+        // Differences −1, −2, −3: mean −2, s = 1, t(0.975, 2) = 4.302653; half-width
+        // 4.302653 / √3 = 2.484138 (tables).
+        let p = Paired::new(&[1.0, 1.0, 1.0], &[2.0, 3.0, 4.0]);
+        let [lo, hi] = p.ci95.expect("3 windows");
+        assert!((lo - (-2.0 - 2.484138)).abs() < 1e-5, "{lo}");
+        assert!((hi - (-2.0 + 2.484138)).abs() < 1e-5, "{hi}");
+        assert_eq!(p.verdict(), Verdict::NotSignificant);
+        // Twenty windows each 1 ± 0.1 lower: significant, and the other way round.
+        let a: Vec<f64> = (0..20).map(|i| 10.0 + 0.1 * (i % 3) as f64).collect();
+        let b: Vec<f64> = a.iter().map(|x| x + 1.0).collect();
+        assert_eq!(Paired::new(&a, &b).verdict(), Verdict::Better);
+        assert_eq!(Paired::new(&b, &a).verdict(), Verdict::Worse);
+    }
+
+    #[test]
+    fn the_sign_test_matches_the_binomial_tail() {
+        // 16 of 30: P(X ≤ 14) for X ~ B(30, 1/2) is 0.4278 (tables), doubled 0.8555.
+        assert!(
+            (sign_test(16, 14) - 0.855536).abs() < 1e-5,
+            "{}",
+            sign_test(16, 14)
+        );
+        // 12 of 16: 2 · P(X ≤ 4), X ~ B(16, 1/2) = 2 · 0.038406 = 0.076813.
+        assert!(
+            (sign_test(12, 4) - 0.076813).abs() < 1e-5,
+            "{}",
+            sign_test(12, 4)
+        );
+        assert_eq!(sign_test(5, 5), 1.0);
+        assert_eq!(sign_test(0, 0), 1.0);
+        // 3000 of 3000: far below any float's reach of 2^−3000, but not NaN.
+        assert_eq!(sign_test(3000, 0), 0.0);
+    }
+}
