@@ -26,6 +26,7 @@ mod controlled;
 mod landscape;
 mod network;
 pub mod plan;
+pub mod unserved;
 
 /// What a finished (or diverged) run measured.
 #[derive(Debug, Clone, PartialEq)]
@@ -54,6 +55,8 @@ pub struct Outcome {
     /// The SMC boundary layer's account (`None` under Baumgarte): how many steps some
     /// link's `|w|` spent beyond `ε`, and the worst.
     pub boundary_layer: Option<crate::trace::drift::LayerWatch>,
+    /// Channels whose requested delays the network did not realize ([`unserved`]).
+    pub unserved: Vec<unserved::Unserved>,
 }
 
 /// Options of a run beyond its scenario.
@@ -204,6 +207,7 @@ fn finish(
         messages: world.messages(),
         events: world.events(),
         boundary_layer: recorder.boundary_layer().cloned(),
+        unserved: unserved::unserved(&world),
     };
     write_epochs(out, &world, &experiment)?;
     let run = Ran {
@@ -482,6 +486,10 @@ fn write_summary(out: &Path, run: &Ran) -> Result<()> {
     }
     if let Some(layer) = recorder.boundary_layer() {
         summary["boundary_layer"] = layer.summary();
+    }
+    // Always present on a partitioned run, empty when every request ran as asked.
+    if scenario.partition.is_some() || !scenario.channels.is_empty() {
+        summary["delays_not_realized"] = json!(outcome.unserved);
     }
     if let Some(p) = &scenario.partition {
         let mut ports = crate::partition::coupling::PortAccount::default();

@@ -58,7 +58,12 @@ impl TdmaLink {
             .iter()
             .flat_map(|c| c.routes.iter().copied())
             .collect();
-        let lines = LineSet::new(s, &routes);
+        let senders = senders(channels);
+        let (layout, initial) = initial_list(s, channels)?;
+        // Lines are chosen by the periods the initial list achieves, not the requested
+        // ones (a request the list cannot serve runs at what it can).
+        let periods = periods_of(&layout, &initial, &senders);
+        let lines = LineSet::new(s, &routes, &periods);
         let node_of = s
             .partition
             .as_ref()
@@ -67,15 +72,6 @@ impl TdmaLink {
         let frames = FrameSizes::from_channels(channels, rigid, coupling, cfg.header_bytes, &|r| {
             lines.on_route(s, &node_of, r)
         });
-        let senders = senders(channels);
-        let layout = crate::network::tdma::CycleLayout::new(&cfg)?;
-        let initial = match &spec.slot_list {
-            Some(list) => list.clone(),
-            None => {
-                let requests = requests(&senders, channels.iter().map(|c| c.spec.tau));
-                schedule(&layout, &requests)?.list
-            }
-        };
         let net = TdmaNetwork::new(cfg, s.seed, frames, channels.len(), initial)?;
         Ok(TdmaLink {
             last: senders
@@ -110,11 +106,7 @@ impl TdmaLink {
     /// The nominal period of every channel under the list in force (a channel without
     /// a slot for one of its senders never delivers: `SimTime::MAX`-like `u64::MAX`).
     pub fn nominal_periods(&self) -> Vec<SimTime> {
-        let list = self.net.lists().active();
-        achieved_periods(self.net.layout(), list, &self.senders)
-            .into_iter()
-            .map(|p| p.unwrap_or(SimTime(u64::MAX)))
-            .collect()
+        periods_of(self.net.layout(), self.net.lists().active(), &self.senders)
     }
 
     /// The schedule of requested periods `taus` [s].
@@ -190,6 +182,39 @@ impl TdmaLink {
     pub fn sends(&self, channel: usize, sender: usize) -> bool {
         self.senders[channel].contains(&sender)
     }
+}
+
+/// The cycle layout of a `tdma` scenario and its initial slot list: the scenario's, or
+/// scheduled from the channels' requested τ.
+fn initial_list(
+    s: &Scenario,
+    channels: &[Channel],
+) -> Result<(crate::network::tdma::CycleLayout, SlotList), TdmaError> {
+    let NetworkSpec::Tdma(spec) = &s.network else {
+        panic!("initial_list on a scenario without a tdma network");
+    };
+    let layout = crate::network::tdma::CycleLayout::new(&spec.config)?;
+    let list = match &spec.slot_list {
+        Some(list) => list.clone(),
+        None => {
+            let requests = requests(&senders(channels), channels.iter().map(|c| c.spec.tau));
+            schedule(&layout, &requests)?.list
+        }
+    };
+    Ok((layout, list))
+}
+
+/// The nominal period of every channel under `list` (`u64::MAX` ns for a channel one of
+/// whose senders it never serves).
+fn periods_of(
+    layout: &crate::network::tdma::CycleLayout,
+    list: &SlotList,
+    senders: &[Vec<usize>],
+) -> Vec<SimTime> {
+    achieved_periods(layout, list, senders)
+        .into_iter()
+        .map(|p| p.unwrap_or(SimTime(u64::MAX)))
+        .collect()
 }
 
 fn requests(senders: &[Vec<usize>], taus: impl Iterator<Item = SimTime>) -> Vec<ChannelRequest> {

@@ -253,12 +253,14 @@ impl CoSim {
     /// Builds the world of a validated scenario, with its first events scheduled.
     pub fn new(scenario: &Scenario) -> CoSim {
         let layout = Layout::new(scenario);
-        let lines = LineSet::new(scenario, &layout.routes);
+        let (channels, tdma) =
+            network_of(scenario, &layout).expect("ok: validation built this network once already");
+        // The periods each channel starts at (on TDMA what the initial list achieves).
+        let periods: Vec<SimTime> = channels.iter().map(|c| c.tau).collect();
+        let lines = LineSet::new(scenario, &layout.routes, &periods);
         let nodes: Vec<Node> = (0..layout.nodes)
             .map(|n| Node::new(scenario, &layout, n, &lines))
             .collect();
-        let (channels, tdma) =
-            network_of(scenario, &layout).expect("ok: validation built this network once already");
         // Each line's two ends, found once: (node, end index) at `a` and at `b`.
         let line_ends = (0..scenario.links.len())
             .map(|l| {
@@ -507,6 +509,8 @@ impl CoSim {
                 continue;
             }
             ch.tau = achieved[c];
+            ch.since = at;
+            ch.taken = 0;
             if ch.routes.is_empty() {
                 continue;
             }
@@ -822,7 +826,9 @@ impl CoSim {
                 self.send(arrive, msg);
             }
         }
-        let next = SimTime(t.0.saturating_add(self.channels[c].tau.0));
+        let ch = &mut self.channels[c];
+        ch.taken = ch.taken.saturating_add(1);
+        let next = ch.next_sample(self.scenario.dt);
         if next < self.scenario.duration {
             self.schedule(next, EventClass::Sample, Event::Sample { channel: c });
         }

@@ -1,6 +1,7 @@
-//! Ideal periodic channels (method §4): a channel samples its routes every τ and
-//! delivers each sample after its latency; the receiver holds a value until the next
-//! arrival.
+//! Ideal periodic channels (method §4): a channel samples its routes every τ (at the
+//! first step at or after each multiple of τ, so any τ ≥ dt runs at its exact average
+//! rate) and delivers each sample after its latency; the receiver holds a value until
+//! the next arrival.
 
 use crate::kernel::SimTime;
 use crate::partition::layout::Route;
@@ -11,13 +12,19 @@ use crate::scenario::model::ChannelSpec;
 pub struct Channel {
     /// The scenario's description.
     pub spec: ChannelSpec,
-    /// The period in force (achieved: a whole number of `dt`).
+    /// The period in force, to the nanosecond: on ideal channels the requested one
+    /// (on TDMA what the slot list achieves).
     pub tau: SimTime,
-    /// The period last requested [s] (a controller may ask for any real value; the
-    /// channel runs at the next whole number of steps, `tau`).
+    /// The period last requested [s] (a controller may ask for any real value; an ideal
+    /// channel runs it to the nanosecond).
     pub requested: f64,
     /// Routes carried, in layout order.
     pub routes: Vec<Route>,
+    /// When the period in force began (the channel's phase at the start; a period
+    /// change's time after one).
+    pub since: SimTime,
+    /// Samples taken since `since`.
+    pub taken: u64,
 }
 
 impl Channel {
@@ -32,7 +39,23 @@ impl Channel {
                 .copied()
                 .collect(),
             spec: spec.clone(),
+            since: spec.phase,
+            taken: 0,
         }
+    }
+
+    /// When an ideal channel samples next: at the first step at or after
+    /// `since + k·τ`, `k = taken`, so that however `τ` falls between steps the
+    /// channel samples `1/τ` times per second on average (a period of whole steps
+    /// samples exactly every `τ`).
+    pub fn next_sample(&self, dt: SimTime) -> SimTime {
+        // Samples 0 … taken − 1 are behind: the next is sample `taken`.
+        let offset = self.tau.0.saturating_mul(self.taken);
+        SimTime(
+            self.since
+                .0
+                .saturating_add(offset.div_ceil(dt.0).saturating_mul(dt.0)),
+        )
     }
 
     /// Latency in force.

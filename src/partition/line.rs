@@ -110,8 +110,10 @@ pub fn default_impedance(ma: f64, mb: f64, stabilizer: &Stabilizer) -> f64 {
 impl LineSet {
     /// The lines of `scenario` (none unless its coupling has lines): each border link
     /// whose oldest sample (`τ + latency` of the channels carrying its force and its
-    /// far body's state, as in the file) is older than the coupling's `above`.
-    pub fn new(scenario: &Scenario, routes: &[Route]) -> LineSet {
+    /// far body's state, `τ` the period channel `i` starts at, `periods[i]`: on a TDMA
+    /// network what its initial slot list achieves, not what the file requests) is
+    /// older than the coupling's `above`.
+    pub fn new(scenario: &Scenario, routes: &[Route], periods: &[SimTime]) -> LineSet {
         let mut impedance = vec![None; scenario.links.len()];
         let Some(lines) = scenario.partition.as_ref().and_then(|p| p.coupling.lines()) else {
             return LineSet { impedance };
@@ -120,8 +122,9 @@ impl LineSet {
             scenario
                 .channels
                 .iter()
-                .find(|c| c.carries(r.kind, r.from, r.to))
-                .map(|c| c.tau.0.saturating_add(c.latency_for(c.tau).0))
+                .zip(periods)
+                .find(|(c, _)| c.carries(r.kind, r.from, r.to))
+                .map(|(c, &tau)| tau.0.saturating_add(c.latency_for(tau).0))
         };
         for r in routes.iter().filter(|r| r.kind == DataKind::Force) {
             let Some(l) = r.link else { continue };

@@ -157,6 +157,9 @@ pub fn plan(scenario: &Scenario) -> Result<RunPlan> {
         .collect();
     let (channels, link) =
         network_of(s, &layout).map_err(|e| Error::invalid("network", e.to_string()))?;
+    // The periods the channels start at (on TDMA what the initial list achieves): the
+    // lines are chosen by these.
+    let periods: Vec<_> = channels.iter().map(|c| c.tau).collect();
     // A channel one of whose senders the slot list never serves has no period.
     let achieved: Vec<_> = channels
         .iter()
@@ -250,7 +253,7 @@ pub fn plan(scenario: &Scenario) -> Result<RunPlan> {
         solver: super::solver_json(s),
         coupling: s.partition.as_ref().map(|p| p.coupling.name().to_string()),
         lines: {
-            let set = crate::partition::line::LineSet::new(s, &layout.routes);
+            let set = crate::partition::line::LineSet::new(s, &layout.routes, &periods);
             (0..s.links.len())
                 .filter_map(|l| set.impedance(l).map(|(z, _)| (format!("L{}", l + 1), z)))
                 .collect()

@@ -406,6 +406,57 @@ fn a_tdma_run_writes_the_network_outputs() {
     assert!(timeline.contains("TDMA slot timeline") && timeline.contains("time t [ms]"));
 }
 
+/// A request a TDMA slot list cannot serve (50 ms on a 5-ms cycle) runs at what the
+/// list achieves, is said on the terminal and in summary.json, and the coupling's lines
+/// are chosen by the achieved period (5 ms + latency: no line), not the requested one
+/// (which made 8 border links lines).
+#[test]
+fn a_delay_the_tdma_list_cannot_serve_is_reported_and_lines_follow_the_achieved_one() {
+    let dir = scratch("tdma_unserved");
+    let mut v = shipped("tdma4_space_fixed");
+    v["duration"] = json!(1.0);
+    v["channels"][0]["tau"] = json!(0.05);
+    v["channels"][1]["tau"] = json!(0.05);
+    let (o, out) = run_in(&dir, &v);
+    assert!(o.status.success(), "{}", said(&o));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("warning: channel tau1 asked for τ = 0.05 s and ran at 0.0051"),
+        "{}",
+        said(&o)
+    );
+    let s = summary(&out);
+    let missed = s["delays_not_realized"].as_array().expect("a list");
+    assert_eq!(missed.len(), 2, "{missed:?}");
+    assert_eq!(missed[0]["channel"], json!("tau1"));
+    assert_eq!(missed[0]["requested"], json!(0.05));
+    assert!(missed[0]["achieved"].as_f64().unwrap() < 0.006);
+    // Every border link kept its predictor and port account (a line has neither), and
+    // the plan lists no line.
+    assert!(
+        s["coupling"]["ports_given_j"].as_f64().unwrap() > 0.0,
+        "no line at an achieved 5 ms: {}",
+        s["coupling"]
+    );
+    let file = write_json(&dir, "fifty.json", &v);
+    let plan = run(&["validate", file.to_str().unwrap()]);
+    assert!(plan.status.success(), "{}", said(&plan));
+    assert!(
+        !String::from_utf8_lossy(&plan.stdout).contains("transmission lines"),
+        "{}",
+        said(&plan)
+    );
+    // As shipped (5 ms requested, 5 ms served): nothing to report.
+    let (o, out) = run_in(&scratch("tdma_served"), &{
+        let mut v = shipped("tdma4_space_fixed");
+        v["duration"] = json!(1.0);
+        v
+    });
+    assert!(o.status.success(), "{}", said(&o));
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("asked for"));
+    assert_eq!(summary(&out)["delays_not_realized"], json!([]));
+}
+
 #[test]
 fn a_controlled_run_writes_the_output_contract() {
     let dir = scratch("controlled_outputs");

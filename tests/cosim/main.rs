@@ -156,6 +156,46 @@ fn bandwidth_is_the_sum_of_k_over_tau_and_messages_follow_the_periods() {
     assert_eq!(world.messages(), want);
 }
 
+/// A period between steps: each sample is taken at the first step at or after its
+/// multiple of τ, so the channel samples 1/τ times per second and the bandwidth is the
+/// requested one.
+#[test]
+fn a_period_between_steps_samples_at_the_next_step_at_its_exact_average_rate() {
+    // τ1 = 1.5 ms, τ2 = 3.7 ms, dt = 1 ms, latency 0 over 3 s.
+    let v = space(3.0, 0.0015, 0.0037, Some(0.0));
+    let mut world = CoSim::new(&scenario(&v));
+    let mut seen = Deliveries::default();
+    world.run_to_end(&mut seen).expect("runs");
+    for (c, tau_ns) in [(0usize, 1_500_000u64), (1, 3_700_000)] {
+        let mut sent: Vec<u64> = seen
+            .0
+            .iter()
+            .filter(|(_, m)| m.channel == c)
+            .map(|(_, m)| m.sent.as_nanos())
+            .collect();
+        sent.dedup();
+        // Sample k at ⌈k τ / dt⌉ dt, for every such time below 3 s.
+        let want: Vec<u64> = (0u64..)
+            .map(|k| (k * tau_ns).div_ceil(1_000_000) * 1_000_000)
+            .take_while(|&t| t < 3_000_000_000)
+            .collect();
+        assert_eq!(sent, want, "channel {c}");
+        let rate = sent.len() as f64 / 3.0;
+        assert!(
+            (rate - 1e9 / tau_ns as f64).abs() < 1.0,
+            "channel {c}: {rate} per s"
+        );
+    }
+    for e in world.epochs() {
+        let want = 1.0 / 0.0015 + 1.0 / 0.0037;
+        assert!(
+            (e.bandwidth - want).abs() < 1e-6,
+            "{} vs {want}",
+            e.bandwidth
+        );
+    }
+}
+
 #[test]
 fn sixteen_nodes_on_the_8x8_grid_run() {
     let v = json!({

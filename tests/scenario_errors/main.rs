@@ -637,9 +637,11 @@ fn channel_values_are_checked() {
     invalid(set_part("/channels/1/name", json!("tau1")), "channels[1].name", "duplicate name \"tau1\" (also channels[0].name)");
     invalid(set_part("/channels/0/tau", json!(0)), "channels[0].tau", "must be > 0 (got 0)");
     invalid(set_part("/channels/0/tau", json!(-0.005)), "channels[0].tau", "must be > 0 (got -0.005)");
-    invalid(set_part("/channels/0/tau", json!(0.0015)), "channels[0].tau", "must be a whole number of dt steps (got 0.0015 s with dt 0.001 s)");
-    invalid(set_part("/channels/0/tau", json!(0.0001)), "channels[0].tau", "whole number of dt steps");
-    invalid(set_part("/channels/1/tau", json!(1e-12)), "channels[1].tau", "whole number of dt steps");
+    // A period between steps is valid (the channel samples at the first step at or after
+    // each multiple of it); below one step it is not.
+    assert!(parse_str(&set_part("/channels/0/tau", json!(0.0015)), "t.json").is_ok());
+    invalid(set_part("/channels/0/tau", json!(0.0001)), "channels[0].tau", "must be at least one step, dt = 0.001 s (got 0.0001 s)");
+    invalid(set_part("/channels/1/tau", json!(1e-12)), "channels[1].tau", "at least one step");
     invalid(set_part("/channels/0/latency", json!(-0.001)), "channels[0].latency", "must be ≥ 0 (got -0.001)");
     invalid(set_part("/channels/0/latency", json!(1.5e-9)), "channels[0].latency", "whole number of nanoseconds");
     invalid(set_part("/channels/1/k", json!(0)), "channels[1].k", "must be > 0 (got 0)");

@@ -113,13 +113,15 @@ fn channel(
     let tau_path = format!("{path}.tau");
     positive(&tau_path, c.tau)?;
     let tau = time(&tau_path, c.tau)?;
-    if tau < dt || tau.as_nanos() % dt.as_nanos() != 0 {
+    // Any period of at least one step: a channel samples at the first step at or after
+    // each multiple of it (method §4).
+    if tau < dt {
         return Err(Error::invalid(
             tau_path,
             format!(
-                "must be a whole number of dt steps (got {} s with dt {} s)",
-                num(c.tau),
-                num(dt.as_secs_f64())
+                "must be at least one step, dt = {} s (got {} s)",
+                num(dt.as_secs_f64()),
+                num(c.tau)
             ),
         ));
     }
