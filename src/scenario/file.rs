@@ -1044,7 +1044,8 @@ pub struct ChannelFile {
     /// Channel name, unique, of letters, digits and `_` (it becomes part of CSV column
     /// names such as `tau_<name>_requested`); required.
     pub name: String,
-    /// Sampling period τ [s], > 0, a whole number of `dt` steps; required.
+    /// Sampling period τ [s], at least `dt`; required. Between steps, each sample is
+    /// taken at the first step at or after its multiple of τ.
     pub tau: f64,
     /// Delivery latency [s], ≥ 0, a whole number of nanoseconds; default τ (the thesis's
     /// `x(t − τ)` reading), following τ when a controller changes it.
