@@ -25,9 +25,17 @@ for n in names:
     order = sorted(costs, key=costs.get)
     print(f"== {n} ({s['status']}, {s['controller']['problem']['kind']}, D_s = {s['controller']['dsm_size']}, "
           f"T = {float(rows[0]['t_end']) - float(rows[0]['t_start']):g} s)")
-    print("   mean cost by method (best first): " + ", ".join(f"{m} {costs[m]:.4f}" for m in order))
-    if "no_opt" in costs:
-        print(f"   dsm / no_opt = {costs['dsm'] / costs['no_opt']:.3f}; dsm / grid = {costs['dsm'] / costs['grid']:.3f}")
+    print("   mean cost by method over its own windows (best first; not a comparison): "
+          + ", ".join(f"{m} {costs[m]:.4f}" for m in order))
+    # Comparisons: the live method against each baseline over the windows where both
+    # were measured (summary.json's `paired`, method §5).
+    for other, p in s.get("paired", {}).items():
+        ci = p["ci95"]
+        ci_text = f"[{ci[0]:+.2e}, {ci[1]:+.2e}]" if ci else "–"
+        ratio = p["ratio"] if p["ratio"] is not None else float("nan")
+        print(f"   {s['controller']['method']} vs {other}: n {p['n']} (excluded {p['excluded']}), "
+              f"ratio {ratio:.3f}, won {p['wins']} lost {p['losses']}, "
+              f"mean difference 95 % CI {ci_text}, sign test p {p['sign_test_p']:.3f}: {p['verdict']}")
     chans = [c["name"] for c in s["channels"]]
     opt_cols = [c for c in rows[0] if c.startswith("grid_opt_tau_")]
     for r in rows:
