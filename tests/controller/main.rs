@@ -216,33 +216,30 @@ fn shipped(name: &str, duration: f64, baselines: Value) -> Scenario {
 }
 
 #[test]
-fn time_cp_grid_optimum_never_slows_forces_below_states_and_sometimes_speeds_them_up() {
+fn time_cp_grid_optimum_gives_forces_the_smaller_delay_in_most_windows_under_sample_and_hold() {
     // Thesis: constraint forces get the smaller delay. Under the 400 Hz budget the
     // force delay is below the state delay exactly when τ_state > 5 ms. Over the 12 s
-    // while body 1 is driven our grid optimum never makes states faster than forces,
-    // but it often picks equal delays (τ_state = 5 ms): a grid that always picked equal
-    // delays would pass the first check, so also count the windows where forces are
-    // strictly faster and require at least one. That is all the model shows in the
-    // sample-and-hold reading: "forces never slower", not "forces faster" in most
-    // windows (results/README.md; the thesis reading's test follows).
+    // while body 1 is driven, in the sample-and-hold reading: with delays realized to
+    // the nanosecond the grid optimum gives forces the smaller delay in 10 of 12
+    // windows and states in 2 (0 s and 3 s). While every delay ran at the next whole
+    // step (τ_force = 1/(400 − 1/τ_state) rounded up), it never gave states the smaller
+    // one but often picked equal delays, and this test asked for "never slower".
     let (_, exp) = run(&shipped("grid16_time_cp_hold", 12.0, json!(["grid"])));
-    let mut forces_faster = 0;
+    let (mut forces_faster, mut states_faster) = (0, 0);
     for w in &exp.windows {
         let tau_state = w.grid_best.as_ref().expect("grid").x[0];
-        assert!(
-            tau_state >= 0.005 - 1e-12,
-            "window {}: τ_state {tau_state} makes states faster",
-            w.t_start
-        );
         forces_faster += usize::from(tau_state > 0.005 + 1e-12);
+        states_faster += usize::from(tau_state < 0.005 - 1e-12);
     }
     eprintln!(
-        "time CP, 12 s: forces strictly faster in {forces_faster} of {} windows",
+        "time CP sample-and-hold, 12 s: forces strictly faster in {forces_faster}, states \
+         in {states_faster} of {} windows",
         exp.windows.len()
     );
     assert!(
-        forces_faster >= 1,
-        "the grid optimum always picked equal delays"
+        2 * forces_faster > exp.windows.len(),
+        "forces faster in only {forces_faster} of {} windows",
+        exp.windows.len()
     );
 }
 
