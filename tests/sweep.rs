@@ -359,9 +359,9 @@ fn bad_sweeps_exit_2_naming_the_axis_and_write_nothing() {
             sweep(json!([axis(
                 "tau1",
                 "/channels/0/tau",
-                json!([0.001, 0.0015])
+                json!([0.001, 0.0005])
             )])),
-            vec!["point p1 (tau1 = 0.0015): channels[0].tau"],
+            vec!["point p1 (tau1 = 0.0005): channels[0].tau"],
         ),
     ];
     for (what, definition, wants) in cases {
@@ -739,17 +739,18 @@ fn validate_checks_each_value_and_the_extremes_not_every_point() {
         "{e}"
     );
     // Every value of an axis of up to 1 000 is checked: the middle of a 3-step range
-    // that is no valid delay (0.0015 s) is found though both ends are valid.
+    // that is no valid window (0.0015 s, not a whole number of 1-ms steps) is found
+    // though both ends are valid.
     let path = write_sweep(
         &dir,
         "mid.json",
         &json!({"name": "mid", "base": "base.json", "axes": [
-            {"name": "tau1", "pointer": "/channels/0/tau",
+            {"name": "period", "pointer": "/measurement/period",
              "range": {"from": 0.001, "to": 0.002, "steps": 3}}]}),
     );
     let e = dsmcosim::sweep::check(&path).unwrap_err().to_string();
     assert!(
-        e.starts_with("point p1 (tau1 = 0.0015): channels[0].tau"),
+        e.starts_with("point p1 (period = 0.0015): measurement.period"),
         "{e}"
     );
     std::fs::remove_dir_all(&dir).unwrap();
