@@ -81,18 +81,8 @@ impl Experiment {
     /// compares).
     pub fn mean(&self, name: &str, live_name: &str) -> Option<f64> {
         let values: Vec<f64> = self
-            .windows
-            .iter()
-            .filter_map(|w| {
-                if name == live_name {
-                    Some(w.live.objective)
-                } else {
-                    w.baselines
-                        .iter()
-                        .find(|b| b.name == name)
-                        .map(|b| b.candidate.objective)
-                }
-            })
+            .objectives(name, live_name)
+            .into_iter()
             .filter(|v| v.is_finite())
             .collect();
         (!values.is_empty()).then(|| values.iter().sum::<f64>() / values.len() as f64)

@@ -112,22 +112,17 @@ impl Paired {
 }
 
 /// Two-sided exact sign test: `P(min(W, L) ≤ min(w, l))` doubled (at most 1) for
-/// `W + L = w + l` fair coin flips. Written out here (a binomial tail in log space, so
-/// thousands of windows neither overflow nor lose the small tail) since it is ten lines.
+/// `W + L = w + l` fair coin flips. Written out here (a binomial tail summed in log
+/// space, so thousands of windows neither overflow nor lose the small tail) since it is
+/// a few lines.
 fn sign_test(wins: usize, losses: usize) -> f64 {
     let n = wins + losses;
-    if n == 0 {
-        return 1.0;
+    let mut ln_term = -(n as f64) * std::f64::consts::LN_2; // ln(C(n, 0) / 2^n)
+    let mut tail = 0.0;
+    for i in 0..=wins.min(losses) {
+        tail += ln_term.exp();
+        ln_term += ((n - i) as f64).ln() - ((i + 1) as f64).ln();
     }
-    let k = wins.min(losses);
-    let ln_choose = |n: usize, k: usize| -> f64 {
-        (1..=k)
-            .map(|i| ((n - k + i) as f64).ln() - (i as f64).ln())
-            .sum()
-    };
-    let tail: f64 = (0..=k)
-        .map(|i| (ln_choose(n, i) - n as f64 * std::f64::consts::LN_2).exp())
-        .sum();
     (2.0 * tail).min(1.0)
 }
 

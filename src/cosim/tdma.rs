@@ -21,7 +21,7 @@ use crate::network::tdma::{
 use crate::network::{Channel, Message};
 use crate::partition::line::LineSet;
 use crate::scenario::file::TdmaSample;
-use crate::scenario::model::{NetworkSpec, Scenario};
+use crate::scenario::model::{NetworkSpec, Scenario, TdmaSpec};
 
 /// A co-simulation's TDMA network and what it has delivered.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -59,7 +59,7 @@ impl TdmaLink {
             .flat_map(|c| c.routes.iter().copied())
             .collect();
         let senders = senders(channels);
-        let (layout, initial) = initial_list(s, channels)?;
+        let (layout, initial) = initial_list(spec, channels)?;
         // Lines are chosen by the periods the initial list achieves, not the requested
         // ones (a request the list cannot serve runs at what it can).
         let periods = periods_of(&layout, &initial, &senders);
@@ -184,15 +184,12 @@ impl TdmaLink {
     }
 }
 
-/// The cycle layout of a `tdma` scenario and its initial slot list: the scenario's, or
+/// The cycle layout of a `tdma` network and its initial slot list: the scenario's, or
 /// scheduled from the channels' requested τ.
 fn initial_list(
-    s: &Scenario,
+    spec: &TdmaSpec,
     channels: &[Channel],
 ) -> Result<(crate::network::tdma::CycleLayout, SlotList), TdmaError> {
-    let NetworkSpec::Tdma(spec) = &s.network else {
-        panic!("initial_list on a scenario without a tdma network");
-    };
     let layout = crate::network::tdma::CycleLayout::new(&spec.config)?;
     let list = match &spec.slot_list {
         Some(list) => list.clone(),

@@ -87,13 +87,21 @@ impl Node {
                 let b = self.coupling.ports_in[i].0;
                 self.damp(b, power, 1.0 - keep);
             }
-            // On side 1 only the giving ends of a giving port are braked.
-            for &(k, a, p_l) in &ends {
-                if sides[ins + k] > 0.0 && p_l > 0.0 {
-                    let positive: f64 =
-                        ends.iter().filter(|e| e.0 == k).map(|e| e.2.max(0.0)).sum();
-                    self.damp(a, p_l, sides[ins + k] * (1.0 - keep) / positive);
+            // On side 1 only the giving ends of a giving port are braked, each the same
+            // fraction of its power. A port's ends are contiguous in `ends`.
+            let mut first = 0;
+            while first < ends.len() {
+                let k = ends[first].0;
+                let last = first + ends[first..].iter().take_while(|e| e.0 == k).count();
+                let port = &ends[first..last];
+                if sides[ins + k] > 0.0 {
+                    let positive: f64 = port.iter().map(|e| e.2.max(0.0)).sum();
+                    let fraction = sides[ins + k] * (1.0 - keep) / positive;
+                    for &(_, a, p_l) in port.iter().filter(|e| e.2 > 0.0) {
+                        self.damp(a, p_l, fraction);
+                    }
                 }
+                first = last;
             }
         }
         self.coupling.side_powers = sides;
