@@ -116,12 +116,9 @@ impl Delays {
     /// "No optimization": every channel at the same delay — at the budget for CP
     /// (`τ = Σk/B`), for UP at `fallback` (the initial delays' mean).
     pub fn equal(&self, fallback: &[f64]) -> Vec<f64> {
-        match self.problem {
-            Problem::Constrained { budget } => {
-                let tau = self.k.iter().sum::<f64>() / budget;
-                vec![tau.clamp(self.tau_min, self.tau_max); self.dim()]
-            }
-            Problem::Unconstrained { .. } => {
+        match self.problem.equal_share(self.k.iter().copied()) {
+            Some(tau) => vec![tau.clamp(self.tau_min, self.tau_max); self.dim()],
+            None => {
                 let mean = fallback.iter().sum::<f64>() / fallback.len() as f64;
                 vec![mean; self.dim()]
             }

@@ -1195,8 +1195,9 @@ pub struct ControllerFile {
     pub tau_min: Option<f64>,
     /// Upper bound of every delay [s]; required.
     pub tau_max: f64,
-    /// Initial controlled delays [s]; default: the channels' `tau` (CP: all but the
-    /// last).
+    /// Initial controlled delays [s], the centre of the DSM's first simplex; default:
+    /// CP, the no-optimization point (every controlled delay at `Σ k / budget`); UP,
+    /// the channels' `tau`.
     #[serde(
         default,
         deserialize_with = "present",

@@ -596,6 +596,18 @@ pub enum Problem {
     },
 }
 
+impl Problem {
+    /// The no-optimization delay of a constrained problem: every channel at the same
+    /// delay, using the whole budget (`τ = Σ k_i / B`, before any bounds); `None` for UP,
+    /// which has no budget to share.
+    pub fn equal_share(&self, k: impl IntoIterator<Item = f64>) -> Option<f64> {
+        match *self {
+            Problem::Constrained { budget } => Some(k.into_iter().sum::<f64>() / budget),
+            Problem::Unconstrained { .. } => None,
+        }
+    }
+}
+
 /// How the controller picks the delays the live plant runs at.
 #[derive(
     Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize, serde::Deserialize,

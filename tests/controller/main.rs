@@ -156,6 +156,12 @@ fn a_controller_needs_valid_settings() {
         json!({"problem": "cp", "budget": 400, "tau_max": 0.0005}),
         "controller.tau_max",
     );
+    // Two channels at tau_max = 50 ms already use 40 /s: a budget of 30 /s cannot be met,
+    // and with no initial given the error names the budget, not the defaulted start.
+    bad(
+        json!({"problem": "cp", "budget": 30, "tau_max": 0.05}),
+        "controller.budget",
+    );
     bad(
         json!({"problem": "cp", "budget": 400, "tau_max": 0.05, "baselines": ["dsm"]}),
         "controller.baselines[0]",
@@ -195,6 +201,37 @@ fn a_controller_needs_valid_settings() {
     });
     v["controller"] = one;
     parse_str(&v.to_string(), "t").expect("24 501 grid points on one delay are allowed");
+}
+
+#[test]
+fn the_default_start_is_the_no_optimization_point_not_the_channels_delays() {
+    // Channels at 10 and 20 ms, weights 1 and 3, budget 400 /s: equal delays at the
+    // budget are (1 + 3) / 400 = 10 ms. The channels' own delays do not set the start.
+    let scene = |controller: Value| {
+        let v = json!({
+            "name": "x", "seed": 1, "duration": 1.0, "dt": 0.001,
+            "model": {"grid": {"rows": 4, "cols": 4, "spacing": 1.8, "mass": 1.0, "size": 0.2}},
+            "partition": {"quadrants": true},
+            "channels": [
+                {"name": "a", "tau": 0.02, "k": 1.0, "borders": [[1, 2], [1, 4]]},
+                {"name": "b", "tau": 0.01, "k": 3.0, "borders": [[2, 3], [3, 4]]}
+            ],
+            "controller": controller
+        });
+        let s = parse_str(&v.to_string(), "t").expect("valid");
+        s.controller.expect("controlled").initial
+    };
+    let cp = scene(json!({"problem": "cp", "budget": 400, "tau_max": 0.05}));
+    assert_eq!(cp.len(), 1);
+    assert!(
+        (cp[0] - 0.01).abs() < 1e-15,
+        "CP starts at Σk/B = 10 ms, got {cp:?}"
+    );
+    let given = scene(json!({"problem": "cp", "budget": 400, "tau_max": 0.05, "initial": [0.009]}));
+    assert_eq!(given, vec![0.009], "an explicit start is kept");
+    // UP has no budget to share: it starts at the channels' delays.
+    let up = scene(json!({"problem": "up", "penalty": 5e-4, "tau_max": 0.05}));
+    assert_eq!(up, vec![0.02, 0.01]);
 }
 
 /// A shipped scenario file as JSON, for a test to edit.

@@ -129,9 +129,16 @@ pub(super) fn controller(
         Problem::Constrained { .. } => n - 1,
         Problem::Unconstrained { .. } => n,
     };
-    let initial = match &c.initial {
-        Some(v) => v.clone(),
-        None => channels[..controlled]
+    // The default start is the no-optimization point: for CP every controlled delay at
+    // the equal share of the budget (so the DSM's first simplex is centred on it), for
+    // UP the channels' own delays.
+    let initial = match (
+        &c.initial,
+        problem.equal_share(channels.iter().map(|ch| ch.k)),
+    ) {
+        (Some(v), _) => v.clone(),
+        (None, Some(tau)) => vec![tau.clamp(tau_min, tau_max); controlled],
+        (None, None) => channels[..controlled]
             .iter()
             .map(|ch| ch.tau.as_secs_f64())
             .collect(),
@@ -162,6 +169,18 @@ pub(super) fn controller(
         let used: f64 = initial.iter().zip(channels).map(|(x, ch)| ch.k / x).sum();
         let last = &channels[n - 1];
         let left = budget - used;
+        let slowest: f64 = channels.iter().map(|ch| ch.k / tau_max).sum();
+        if c.initial.is_none() && budget < slowest {
+            return Err(Error::invalid(
+                "controller.budget",
+                format!(
+                    "cannot be met: even every channel at tau_max {} s uses {} /s (got {})",
+                    num(tau_max),
+                    num(slowest),
+                    num(budget)
+                ),
+            ));
+        }
         if !(left > 0.0 && last.k / left <= tau_max) {
             return Err(Error::invalid(
                 "controller.initial",
