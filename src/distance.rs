@@ -2,7 +2,8 @@
 //! traced step — the horizon over which two runs of a chaotic scene stay comparable.
 //!
 //! Reads `trace.csv` of a reference run directory and of each compared run (all traced
-//! at the same times), and writes `distance.csv` (`t`, then one column
+//! at the same times; a run that stopped early, e.g. one that diverged, up to its end,
+//! its cells empty after it), and writes `distance.csv` (`t`, then one column
 //! `<run>_B<id>` per run (its directory as given) and body: `|p_run − p_ref|` [m]) and `distance.svg` (the same
 //! on a log scale; zero distances, e.g. at t = 0, are not drawn on it).
 //!
@@ -106,15 +107,18 @@ pub fn command(reference: &Path, runs: &[PathBuf], bodies: &[u32], out: &Path) -
         .iter()
         .map(|d| Trace::read(d))
         .collect::<Result<Vec<_>>>()?;
-    // Every trace must be sampled at the reference's times.
+    // Every trace must be sampled at the reference's times. A run that stopped early (it
+    // diverged, or was interrupted) is compared up to its last traced time: its trace up
+    // to there is its result.
     for t in &traces {
-        let same = t.rows.len() == refer.rows.len()
+        let same = t.rows.len() <= refer.rows.len()
             && t.rows.iter().zip(&refer.rows).all(|(a, b)| a[0] == b[0]);
         if !same {
             return Err(Error::invalid(
                 t.file.display().to_string(),
                 format!(
-                    "is not traced at the times of {} (same duration and decimation needed)",
+                    "is not traced at the times of {} (same decimation needed, and a \
+                     duration no longer than the reference's)",
                     refer.file.display()
                 ),
             ));
@@ -141,9 +145,14 @@ pub fn command(reference: &Path, runs: &[PathBuf], bodies: &[u32], out: &Path) -
     create_out_dir(out)?;
     // Through the CSV writer: a run path with a comma or a quote is one quoted field.
     let header = std::iter::once("t".to_string()).chain(columns.iter().map(|(n, _)| n.clone()));
+    // A run that ended earlier leaves its cells empty past its end.
     let rows = refer.rows.iter().enumerate().map(|(i, row)| {
         std::iter::once(format!("{}", row[0]))
-            .chain(columns.iter().map(move |(_, d)| format!("{}", d[i])))
+            .chain(
+                columns
+                    .iter()
+                    .map(move |(_, d)| d.get(i).map_or(String::new(), |v| format!("{v}"))),
+            )
             .collect::<Vec<String>>()
     });
     let csv = crate::output::csv_text(std::iter::once(header.collect::<Vec<String>>()).chain(rows));

@@ -417,7 +417,7 @@ fn expected(p: &Point, base_digest: &str) -> Record {
             divergence: None,
             mean_cost: None,
             mean_cost_by_method: Default::default(),
-            paired_ratio: Default::default(),
+            paired: Default::default(),
             live_method: None,
             lost_frames: 0,
             channels: Vec::new(),

@@ -95,10 +95,9 @@ fn dsm_over(r: &Record, baseline: &str) -> f64 {
         return f64::NAN;
     }
     r.row
-        .paired_ratio
+        .paired
         .get(baseline)
-        .copied()
-        .flatten()
+        .and_then(|p| p.ratio)
         .unwrap_or(f64::NAN)
 }
 

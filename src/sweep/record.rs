@@ -26,6 +26,57 @@ pub struct ChannelRow {
     pub tau_achieved: Option<f64>,
 }
 
+/// A controlled run's live method against one baseline over the windows where both
+/// were measured (summary.json → `paired.<baseline>`, method §5). `None` is a value
+/// the run did not give (no window, or fewer than 2 for the interval).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PairedRow {
+    /// Windows where both were measured.
+    pub n: Option<u64>,
+    /// Windows where the live method was lower.
+    pub wins: Option<u64>,
+    /// Windows where the live method was higher.
+    pub losses: Option<u64>,
+    /// Ratio of the two means over those windows.
+    pub ratio: Option<f64>,
+    /// Mean paired difference (live − baseline).
+    pub mean_difference: Option<f64>,
+    /// 95 % confidence interval of the mean difference.
+    pub ci95: Option<[f64; 2]>,
+    /// Two-sided exact sign test of wins against losses.
+    pub sign_test_p: Option<f64>,
+    /// `better`, `worse` or `not_significant`.
+    pub verdict: Option<String>,
+}
+
+impl PairedRow {
+    /// Reads one comparison of summary.json's `paired` (missing keys stay `None`).
+    fn from_summary(v: &Value) -> PairedRow {
+        let f = |k: &str| v.get(k).and_then(Value::as_f64);
+        let u = |k: &str| v.get(k).and_then(Value::as_u64);
+        let ci95 = v.get("ci95").and_then(Value::as_array).and_then(|a| {
+            match (
+                a.first().and_then(Value::as_f64),
+                a.get(1).and_then(Value::as_f64),
+            ) {
+                (Some(lo), Some(hi)) => Some([lo, hi]),
+                _ => None,
+            }
+        });
+        PairedRow {
+            n: u("n"),
+            wins: u("wins"),
+            losses: u("losses"),
+            ratio: f("ratio"),
+            mean_difference: f("mean_difference"),
+            ci95,
+            sign_test_p: f("sign_test_p"),
+            verdict: v.get("verdict").and_then(Value::as_str).map(str::to_string),
+        }
+    }
+}
+
 /// Where and when a diverged point failed (summary.json → `divergence`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -53,11 +104,10 @@ pub struct Row {
     /// `mean_cost_<method>` of a controlled run, by method [m].
     pub mean_cost_by_method: BTreeMap<String, Option<f64>>,
     /// A controlled run's live method against each baseline over the windows where
-    /// both were measured (`summary.json`'s `paired`): the ratio of their means, by
-    /// baseline. Empty for a run without a controller (and in records written before
-    /// the paired comparisons).
+    /// both were measured (`summary.json`'s `paired`), by baseline. Empty for a run
+    /// without a controller.
     #[serde(default)]
-    pub paired_ratio: BTreeMap<String, Option<f64>>,
+    pub paired: BTreeMap<String, PairedRow>,
     /// The live method of a controlled run (`controller.method`).
     #[serde(default)]
     pub live_method: Option<String>,
@@ -93,12 +143,12 @@ impl Row {
             .iter()
             .filter_map(|(k, v)| Some((k.strip_prefix("mean_cost_")?.to_string(), v.as_f64())))
             .collect();
-        let paired_ratio = obj
+        let paired = obj
             .get("paired")
             .and_then(Value::as_object)
             .map(|m| {
                 m.iter()
-                    .map(|(k, v)| (k.clone(), v.get("ratio").and_then(Value::as_f64)))
+                    .map(|(k, v)| (k.clone(), PairedRow::from_summary(v)))
                     .collect()
             })
             .unwrap_or_default();
@@ -154,7 +204,7 @@ impl Row {
             divergence,
             mean_cost: obj.get("mean_cost").and_then(Value::as_f64),
             mean_cost_by_method,
-            paired_ratio,
+            paired,
             live_method,
             lost_frames: obj.get("lost_frames").and_then(Value::as_u64).unwrap_or(0),
             channels,

@@ -4,7 +4,9 @@
 //! per axis, `rep` (with `repeat` > 1), `seed`,
 //! `status`, `diverged_at` [s], `diverged_node`, `diverged_where` (the link `L14` or body
 //! `B3`; the three are empty for a point that finished), `mean_cost`,
-//! `mean_cost_<method>` for every method any record has (sorted), `lost_frames`,
+//! `mean_cost_<method>` for every method any record has (sorted), for every baseline
+//! any record compares with (sorted) the paired columns `paired_<c>_<baseline>`
+//! ([`super::points::PAIRED_COLUMNS`]), `lost_frames`,
 //! `tau_<name>_requested,tau_<name>_achieved` for every channel any record has (in order
 //! of first appearance by index), `bandwidth`, `digest`. Numbers are in Rust's shortest
 //! round-trip form; a value a run did not produce is an empty field. An axis column
@@ -20,7 +22,9 @@
 
 use std::collections::BTreeSet;
 
-use super::points::{Plan, LEADING_COLUMNS, LOSS_COLUMN, STATUS_COLUMNS, TRAILING_COLUMNS};
+use super::points::{
+    Plan, LEADING_COLUMNS, LOSS_COLUMN, PAIRED_COLUMNS, STATUS_COLUMNS, TRAILING_COLUMNS,
+};
 use super::record::Record;
 use crate::output::csv_text;
 
@@ -40,7 +44,7 @@ pub fn sweep_csv(plan: &Plan, records: &[Record]) -> String {
         .collect();
     let paired: BTreeSet<&str> = records
         .iter()
-        .flat_map(|r| r.row.paired_ratio.keys().map(String::as_str))
+        .flat_map(|r| r.row.paired.keys().map(String::as_str))
         .collect();
     let mut channels: Vec<&str> = Vec::new();
     for r in records {
@@ -57,7 +61,9 @@ pub fn sweep_csv(plan: &Plan, records: &[Record]) -> String {
     }
     header.extend(STATUS_COLUMNS.map(String::from));
     header.extend(methods.iter().map(|m| format!("mean_cost_{m}")));
-    header.extend(paired.iter().map(|m| format!("paired_ratio_{m}")));
+    for m in &paired {
+        header.extend(PAIRED_COLUMNS.map(|c| format!("paired_{c}_{m}")));
+    }
     header.push(LOSS_COLUMN.into());
     for c in &channels {
         header.push(format!("tau_{c}_requested"));
@@ -88,11 +94,22 @@ pub fn sweep_csv(plan: &Plan, records: &[Record]) -> String {
                 .iter()
                 .map(|m| num(row.mean_cost_by_method.get(*m).copied().flatten())),
         );
-        f.extend(
-            paired
-                .iter()
-                .map(|m| num(row.paired_ratio.get(*m).copied().flatten())),
-        );
+        for m in &paired {
+            let p = row.paired.get(*m).cloned().unwrap_or_default();
+            let count = |c: Option<u64>| c.map_or(String::new(), |c| c.to_string());
+            let ci = |i: usize| num(p.ci95.map(|c| c[i]));
+            f.extend([
+                num(p.ratio),
+                count(p.n),
+                count(p.wins),
+                count(p.losses),
+                num(p.mean_difference),
+                ci(0),
+                ci(1),
+                num(p.sign_test_p),
+                p.verdict.unwrap_or_default(),
+            ]);
+        }
         f.push(row.lost_frames.to_string());
         for name in &channels {
             let c = row.channels.iter().find(|c| c.name == *name);
@@ -140,7 +157,7 @@ mod tests {
                     .iter()
                     .map(|&(m, c)| (m.to_string(), Some(c)))
                     .collect::<BTreeMap<_, _>>(),
-                paired_ratio: BTreeMap::new(),
+                paired: BTreeMap::new(),
                 live_method: None,
                 lost_frames: 0,
                 channels: vec![ChannelRow {
@@ -189,5 +206,48 @@ mod tests {
             )
         );
         assert_eq!(timing_csv(&rows), "index,wall_seconds\n0,0.25\n1,0.25\n");
+    }
+
+    #[test]
+    fn each_paired_comparison_has_its_columns_and_a_run_without_it_leaves_them_empty() {
+        let p = plan(
+            &parse(
+                r#"{"name": "s", "base": "b", "axes": [
+                {"name": "size", "pointer": "/a", "values": [1, 2]}]}"#,
+                "s",
+            )
+            .unwrap(),
+        )
+        .unwrap();
+        let mut rows = [
+            record(0, vec![json!(1)], &[], "c"),
+            record(1, vec![json!(2)], &[], "c"),
+        ];
+        rows[0].row.paired.insert(
+            "no_opt".into(),
+            crate::sweep::record::PairedRow {
+                n: Some(30),
+                wins: Some(20),
+                losses: Some(10),
+                ratio: Some(0.875),
+                mean_difference: Some(-0.25),
+                ci95: Some([-0.5, 0.125]),
+                sign_test_p: Some(0.0625),
+                verdict: Some("not_significant".into()),
+            },
+        );
+        let csv = sweep_csv(&p, &rows);
+        let mut lines = csv.lines();
+        let header = lines.next().unwrap();
+        assert!(header.contains(
+            "mean_cost,paired_ratio_no_opt,paired_n_no_opt,paired_wins_no_opt,\
+             paired_losses_no_opt,paired_diff_no_opt,paired_ci_low_no_opt,\
+             paired_ci_high_no_opt,paired_p_no_opt,paired_verdict_no_opt,lost_frames"
+        ));
+        assert!(lines
+            .next()
+            .unwrap()
+            .contains(",0.5,0.875,30,20,10,-0.25,-0.5,0.125,0.0625,not_significant,0,"));
+        assert!(lines.next().unwrap().contains(",0.5,,,,,,,,,,0,"));
     }
 }

@@ -550,10 +550,27 @@ fn distance_measures_how_far_runs_drift_from_a_reference() {
     assert!(said(&o).contains("--bodies 99"), "{}", said(&o));
     let o = call(args("1,2,3,4,5,6,7", &[&same, &other]));
     assert_eq!(o.status.code(), Some(2), "{}", said(&o));
+    // A run that ended earlier (as a diverged run does) is compared up to its end, its
+    // cells empty after it; one traced longer than the reference is refused.
+    let mut shorter = short_grid();
+    shorter["duration"] = json!(1.0);
+    let short = runs("short", shorter);
+    let o = call(args("1", &[&same, &short]));
+    assert!(o.status.success(), "{}", said(&o));
+    let csv = std::fs::read_to_string(out.join("distance.csv")).unwrap();
+    let cells: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(cells.len(), 101, "the reference's times");
+    assert_eq!(cells[50][2], "0", "the short run up to its end at 1 s");
+    assert_eq!(cells[51][2], "", "nothing after its end");
+    assert_eq!(cells[51][1], "0", "the full run goes on");
     let mut longer = short_grid();
-    longer["duration"] = json!(1.0);
-    let short = runs("short", longer);
-    let o = call(args("1", &[&short]));
+    longer["duration"] = json!(3.0);
+    let long = runs("long", longer);
+    let o = call(args("1", &[&long]));
     assert_eq!(o.status.code(), Some(2), "{}", said(&o));
     assert!(said(&o).contains("not traced at the times"), "{}", said(&o));
 }
