@@ -17,8 +17,9 @@
 # subdirectories), the stability map (results/stability/), the coupling study
 # (results/coupling/, and of the mechanisms in scenarios/mechanisms/ under
 # results/coupling/mechanisms/) with the commands docs/accuracy.md and docs/guide.md give, and
-# the D_s sweeps (results/sweeps/dsm_size_cp{,_hold}/); they take minutes and their
-# wall-time columns change on every run, so the default leaves them alone.
+# the sweeps behind the thesis-claim table (results/sweeps/dsm_size_*/ and measure_*/,
+# then the table in results/README.md); they take minutes and their wall-time columns
+# change on every run, so the default leaves them alone.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 studies=0
@@ -69,8 +70,12 @@ done
 # errors"), from the stored traces just written.
 for reading in thesis_reading sample_and_hold; do
   suffix=""; [ "$reading" = sample_and_hold ] && suffix=_hold
+  online=""
+  [ "$reading" = thesis_reading ] \
+    && online="results/grid16_space_cp_online results/grid16_space_cp_ds2_online"
+  # shellcheck disable=SC2086 # $online is a list of directories
   "$bin" distance results/grid16_monolithic results/grid16_space_cp_no_opt$suffix \
-    results/grid16_space_cp$suffix results/grid16_space_cp_ds2$suffix --bodies 1,16 \
+    results/grid16_space_cp$suffix results/grid16_space_cp_ds2$suffix $online --bodies 1,16 \
     --out "results/body_errors/$reading" >/dev/null \
     || { echo "results/body_errors/$reading: failed"; exit 1; }
   echo "results/body_errors/$reading: regenerated"
@@ -93,13 +98,18 @@ if [ $studies -eq 1 ]; then
   for m in scenarios/mechanisms/*.json scenarios/hanging_chain.json; do
     study "results/coupling/mechanisms/$(basename "$m" .json)" coupling "$m"
   done
-  # The D_s sweeps (results/README.md, "Does optimizing pay?"): rerun from scratch; the
-  # per-point directories stay out of git (results/sweeps/.gitignore).
-  for s in dsm_size_cp dsm_size_cp_hold; do
+  # The sweeps behind the thesis-claim table (results/README.md; written by
+  # scenarios/sweeps/make_thesis_claims.py): rerun from scratch, each point keeping its
+  # summary.json and epochs.csv (stored: results/sweeps/.gitignore lets these in), then
+  # the table is rewritten into results/README.md.
+  for s in dsm_size_cp dsm_size_cp_hold dsm_size_up measure_ramp measure_T10 \
+    measure_tdma4 measure_tdma16; do
     rm -rf "results/sweeps/$s"
-    "$bin" sweep "scenarios/sweeps/$s.json" --out "results/sweeps/$s" >/dev/null \
-      || { echo "results/sweeps/$s: failed"; exit 1; }
+    "$bin" sweep "scenarios/sweeps/$s.json" --out "results/sweeps/$s" --keep summary \
+      >/dev/null || { echo "results/sweeps/$s: failed"; exit 1; }
     echo "results/sweeps/$s: regenerated"
   done
+  python3 results/summarize_claims.py --write results/README.md \
+    || { echo "results/README.md: claim table failed"; exit 1; }
 fi
 exit 0
