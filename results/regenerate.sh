@@ -109,6 +109,12 @@ if [ $studies -eq 1 ]; then
       >/dev/null || { echo "results/sweeps/$s: failed"; exit 1; }
     echo "results/sweeps/$s: regenerated"
   done
+  # The FMU loop's slot layouts (docs/fmi.md, "A networked control loop on TDMA").
+  rm -rf results/sweeps/fmu_pd_tdma_layouts
+  "$bin" sweep scenarios/sweeps/fmu_pd_tdma_layouts.json --out results/sweeps/fmu_pd_tdma_layouts \
+    --keep summary >/dev/null 2>"$tmp/stderr" \
+    || { echo "results/sweeps/fmu_pd_tdma_layouts: failed: $(cat "$tmp/stderr")"; exit 1; }
+  echo "results/sweeps/fmu_pd_tdma_layouts: regenerated"
   python3 results/summarize_claims.py --write results/README.md \
     || { echo "results/README.md: claim table failed"; exit 1; }
 fi

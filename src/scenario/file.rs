@@ -160,7 +160,7 @@ pub struct ScenarioFile {
     pub base_dir: Option<std::path::PathBuf>,
 }
 
-/// `fmus[i]`: an FMI 2.0 co-simulation FMU (docs/fmu.md).
+/// `fmus[i]`: an FMI 2.0 co-simulation FMU (docs/fmi.md).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct FmuFile {

@@ -725,7 +725,7 @@ pub struct Scenario {
     pub channels: Vec<ChannelSpec>,
     /// Delay controller; `None` = channels keep their scenario periods.
     pub controller: Option<ControllerSpec>,
-    /// FMUs run as parts of the scene (docs/fmu.md).
+    /// FMUs run as parts of the scene (docs/fmi.md).
     pub fmus: Vec<FmuSpec>,
     /// FMU output → FMU input connections, each on a channel.
     pub connections: Vec<ConnectionSpec>,
