@@ -35,20 +35,38 @@ pub fn load_with(path: &Path, sets: &[String]) -> Result<(Scenario, String)> {
         let scenario = super::validate::parse_at(&text, &label, Some(path))?;
         return Ok((scenario, text));
     }
+    let Ok(text) = crate::input::read_text(path) else {
+        // Not readable or not UTF-8: the plain loader says which, and where.
+        return super::load(path).map(|s| (s, String::new()));
+    };
+    let label = path.display().to_string();
+    text_with(&text, &label, Some(path), sets)
+}
+
+/// The scenario of the JSON `text` with `sets` applied, and its text (the given text
+/// without overrides), as [`load_with`] does for a file; `label` names the source in
+/// errors and `path` (if any) is where relative FMU paths are read from (the library's
+/// callers that hold a scenario in memory, such as the Python package, use it).
+pub fn text_with(
+    text: &str,
+    label: &str,
+    path: Option<&Path>,
+    sets: &[String],
+) -> Result<(Scenario, String)> {
+    if sets.is_empty() {
+        let scenario = super::validate::parse_at(text, label, path)?;
+        return Ok((scenario, text.to_string()));
+    }
     if sets.len() > MAX_OVERRIDES {
         return Err(Error::invalid(
             "--set",
             format!("{} overrides; at most {MAX_OVERRIDES}", sets.len()),
         ));
     }
-    let Ok(text) = crate::input::read_text(path) else {
-        // Not readable or not UTF-8: the plain loader says which, and where.
-        return super::load(path).map(|s| (s, String::new()));
-    };
-    let body = text.strip_prefix('\u{feff}').unwrap_or(&text);
+    let body = text.strip_prefix('\u{feff}').unwrap_or(text);
     let Ok(mut doc) = serde_json::from_str::<Value>(body) else {
-        // A syntax error: the plain loader names its line and column.
-        return super::load(path).map(|s| (s, text));
+        // A syntax error: the plain parser names its line and column.
+        return super::validate::parse_at(text, label, path).map(|s| (s, text.to_string()));
     };
     for set in sets {
         apply(&mut doc, set)?;
@@ -56,9 +74,8 @@ pub fn load_with(path: &Path, sets: &[String]) -> Result<(Scenario, String)> {
     let mut text =
         serde_json::to_string_pretty(&doc).map_err(|e| Error::invalid("--set", e.to_string()))?;
     text.push('\n');
-    let label = format!("{} with --set", path.display());
-    let scenario =
-        super::validate::parse_at(&text, &label, Some(path)).map_err(|e| locate(e, sets))?;
+    let label = format!("{label} with --set");
+    let scenario = super::validate::parse_at(&text, &label, path).map_err(|e| locate(e, sets))?;
     Ok((scenario, text))
 }
 
@@ -148,6 +165,23 @@ pub fn apply(doc: &mut Value, set: &str) -> Result<()> {
 mod tests {
     use super::*;
     use serde_json::json;
+
+    #[test]
+    fn a_scenario_in_memory_takes_overrides_as_a_file_does() {
+        let text = r#"{"name": "m", "seed": 1, "duration": 1.0, "dt": 0.001,
+            "model": {"grid": {"rows": 2, "cols": 2, "spacing": 1.0, "mass": 1.0,
+            "size": 0.1}}}"#;
+        let (plain, same) = text_with(text, "mem", None, &[]).unwrap();
+        assert_eq!(same, text, "without overrides the text is kept as given");
+        let (s, rewritten) = text_with(text, "mem", None, &["/duration=2.0".into()]).unwrap();
+        assert_eq!(s.steps, 2 * plain.steps);
+        assert!(rewritten.contains("\"duration\": 2.0"));
+        let e = text_with(text, "mem", None, &["/dt=-1".into()]).unwrap_err();
+        assert!(
+            e.to_string().contains("dt") && e.to_string().contains("--set /dt=-1"),
+            "{e}"
+        );
+    }
 
     #[test]
     fn a_pointer_reads_as_the_path_errors_name() {

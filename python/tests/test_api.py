@@ -1,0 +1,156 @@
+"""The Python package against the command line and the files a run writes.
+
+Run from the checkout after `pip install .` (CI does, in a fresh venv):
+`python -m pytest python/tests`. DSMCOSIM_BIN names the command-line binary to compare
+with (default: target/release/dsmcosim of this checkout).
+"""
+
+import csv
+import io
+import json
+import math
+import os
+import subprocess
+import threading
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+import dsmcosim
+
+REPO = Path(__file__).resolve().parents[2]
+SCENARIOS = REPO / "scenarios"
+BIN = Path(os.environ.get("DSMCOSIM_BIN", REPO / "target" / "release" / "dsmcosim"))
+
+
+def cli_run(scenario, out, *sets):
+    """Runs the command line on `scenario` with `--set` strings; its summary.json."""
+    args = [str(BIN), "run", str(scenario), "--out", str(out), "-q"]
+    for s in sets:
+        args += ["--set", s]
+    subprocess.run(args, check=True, capture_output=True)
+    return json.loads((Path(out) / "summary.json").read_text())
+
+
+def test_a_run_gives_the_command_lines_digest_and_files(tmp_path):
+    scenario = SCENARIOS / "tdma4_space_fixed.json"
+    ran = dsmcosim.run(scenario, tmp_path / "py", duration=2.0)
+    cli = cli_run(scenario, tmp_path / "cli", "/duration=2.0")
+    assert ran.digest == cli["digest"]
+    assert ran.summary["steps"] == cli["steps"] == 2000
+    for name in ["trace.csv", "epochs.csv", "network.csv", "scenario.json"]:
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
+
+
+def test_every_dataframe_round_trips_its_csv_file(tmp_path):
+    """Each DataFrame holds exactly the file's values: every cell, parsed from the text
+    with the standard library, equals the DataFrame's to the bit (the sign of a zero
+    included; an empty cell is NaN), and each column is typed."""
+    ran = dsmcosim.run(SCENARIOS / "tdma4_space_fixed.json", tmp_path, duration=2.0)
+    for attr, name in [("trace", "trace.csv"), ("epochs", "epochs.csv"),
+                       ("network", "network.csv")]:
+        df = getattr(ran, attr)
+        rows = list(csv.reader(io.StringIO((tmp_path / name).read_text())))
+        header, rows = rows[0], rows[1:]
+        assert list(df.columns) == header, name
+        assert len(df) == len(rows) > 0, name
+        for j, col in enumerate(header):
+            kind = df[col].dtype.kind
+            assert kind in "fiO", (name, col, df[col].dtype)
+            for i, row in enumerate(rows):
+                cell, value = row[j], df[col].iloc[i]
+                if cell == "":
+                    assert isinstance(value, float) and math.isnan(value), (name, col, i)
+                elif kind == "O":
+                    assert value == cell, (name, col, i)
+                else:
+                    x = float(cell)
+                    assert value == x and math.copysign(1, value) == math.copysign(1, x), \
+                        (name, col, i, cell, value)
+    assert ran.trace["t"].dtype.kind == "f" and ran.trace["t"].iloc[0] == 0.0
+
+
+def test_a_dict_scenario_and_keyword_overrides_match_the_file_and_set(tmp_path):
+    doc = json.loads((SCENARIOS / "grid16_space_fixed.json").read_text())
+    doc["duration"] = 2.0
+    doc["channels"][0]["tau"] = 0.004
+    from_dict = dsmcosim.run(doc)
+    from_file = dsmcosim.run(SCENARIOS / "grid16_space_fixed.json", duration=2.0,
+                             channels__0__tau=0.004)
+    by_pointer = dsmcosim.run(SCENARIOS / "grid16_space_fixed.json",
+                              set={"/duration": 2.0, "/channels/0/tau": 0.004})
+    assert from_dict.digest == from_file.digest == by_pointer.digest
+    assert from_dict.directory is None, "out=None leaves no directory behind"
+    other = dsmcosim.run(SCENARIOS / "grid16_space_fixed.json", duration=2.0)
+    assert other.digest != from_dict.digest, "the override changed the run"
+
+
+def test_bad_input_raises_naming_the_field_and_writes_nothing(tmp_path):
+    out = tmp_path / "out"
+    with pytest.raises(dsmcosim.DsmcosimError) as e:
+        dsmcosim.run(SCENARIOS / "grid16_space_fixed.json", out, channels__0__tau=-1.0)
+    assert e.value.field == "channels[0].tau"
+    assert e.value.exit_code == 2
+    assert "--set /channels/0/tau=-1.0" in e.value.message
+    assert not out.exists()
+    with pytest.raises(dsmcosim.DsmcosimError) as e:
+        dsmcosim.validate({"name": "x", "seed": 1, "duration": 1.0, "dt": -0.001,
+                           "model": {"grid": {"rows": 2, "cols": 2, "spacing": 1.0,
+                                              "mass": 1.0, "size": 0.1}}})
+    assert e.value.field == "dt"
+    with pytest.raises(dsmcosim.DsmcosimError) as e:
+        dsmcosim.run(SCENARIOS / "grid16_space_fixed.json", duraton=1.0)
+    assert "duraton" in str(e.value)
+
+
+def test_a_diverged_run_raises_with_exit_code_3_and_keeps_its_outputs(tmp_path):
+    with pytest.raises(dsmcosim.DsmcosimError) as e:
+        dsmcosim.run(SCENARIOS / "grid16_space_fixed.json", tmp_path,
+                     set={"/divergence": {"max_violation": 1e-6}})
+    assert e.value.exit_code == 3
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["status"] != "ok"
+
+
+def test_validate_returns_the_plan(tmp_path):
+    plan = dsmcosim.validate(SCENARIOS / "tdma4_space_fixed.json")
+    cli = tmp_path / "plan.json"
+    subprocess.run([str(BIN), "validate", str(SCENARIOS / "tdma4_space_fixed.json"),
+                    "--json", str(cli), "-q"], check=True, capture_output=True)
+    assert plan == json.loads(cli.read_text())
+
+
+def test_a_sweep_returns_its_table(tmp_path):
+    sweep_file = tmp_path / "sweep.json"
+    sweep_file.write_text(json.dumps({
+        "name": "tiny", "base": str(SCENARIOS / "grid16_space_fixed.json"),
+        "overrides": {"/duration": 2.0},
+        "axes": [{"name": "tau1", "pointer": "/channels/0/tau",
+                  "values": [0.002, 0.005, 0.01]}]}))
+    table = dsmcosim.sweep(sweep_file, tmp_path / "out", keep="summary")
+    assert list(table["tau1"]) == [0.002, 0.005, 0.01]
+    assert (table["status"] == "ok").all()
+    assert table.equals(pd.read_csv(tmp_path / "out" / "sweep.csv", keep_default_na=False,
+                                    na_values=[""]))
+    # The middle point is the shipped scene at 2 s.
+    assert table["digest"][1] == dsmcosim.run(SCENARIOS / "grid16_space_fixed.json",
+                                              duration=2.0).digest
+
+
+def test_runs_on_threads_give_the_same_digests(tmp_path):
+    """The GIL is released during a run: two Python threads run at once, and each
+    gives the digest it gives alone."""
+    scenario = SCENARIOS / "grid16_space_fixed.json"
+    alone = dsmcosim.run(scenario, duration=2.0).digest
+    digests = [None, None]
+
+    def work(k):
+        digests[k] = dsmcosim.run(scenario, tmp_path / str(k), duration=2.0).digest
+
+    threads = [threading.Thread(target=work, args=(k,)) for k in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(timeout=600)
+    assert digests == [alone, alone]
