@@ -12,6 +12,6 @@ docs/python.md.
 """
 
 from ._native import DsmcosimError, __version__
-from ._api import Run, run, sweep, validate
+from ._api import CoSim, Run, run, sweep, validate
 
-__all__ = ["DsmcosimError", "Run", "run", "sweep", "validate", "__version__"]
+__all__ = ["CoSim", "DsmcosimError", "Run", "run", "sweep", "validate", "__version__"]

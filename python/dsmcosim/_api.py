@@ -129,3 +129,101 @@ def sweep(sweep_file: Union[str, "os.PathLike[str]"], out: Union[str, "os.PathLi
     _native.sweep(path=os.fspath(sweep_file), out=os.fspath(out), sets=sets, keep=keep,
                   resume=resume)
     return read_table(Path(out) / "sweep.csv")
+
+
+class CoSim:
+    """A co-simulation steered from Python, window by window, with exactly the data the
+    delay controller has: advance it to a time, read the cost of the last measurement
+    window, set the channels' periods, fork it to try a candidate, checkpoint it.
+
+        sim = dsmcosim.CoSim("scenarios/grid16_space_fixed.json", duration=10.0)
+        while not sim.finished:
+            trial = sim.fork()                 # measure a candidate on a copy
+            trial.set_periods([0.004, 0.006])
+            trial.advance(sim.now + 1.0)
+            ...
+            sim.set_periods(best)              # then steer the live run
+            sim.advance(sim.now + 1.0)
+        sim.digest
+
+    The scenario must have no `controller` (Python is the controller); its channels'
+    `tau` are the periods it starts at, and `measurement.period` sets the windows whose
+    cost `window_cost()` gives. Same scenario and same decisions give the same digest,
+    the command line's for the same scenario when the periods are never changed (or set
+    once at t = 0 to the values the file would hold). The GIL is released while it
+    advances.
+    """
+
+    def __init__(self, scenario: Scenario, *, set: Optional[Mapping[str, Any]] = None,
+                 base_dir: Optional[Union[str, "os.PathLike[str]"]] = None, **overrides: Any):
+        self._sim = _native.CoSim(_sets(overrides, set), **_source(scenario, base_dir))
+
+    @classmethod
+    def _of(cls, sim) -> "CoSim":
+        obj = cls.__new__(cls)
+        obj._sim = sim
+        return obj
+
+    @classmethod
+    def resume(cls, path: Union[str, "os.PathLike[str]"]) -> "CoSim":
+        """The co-simulation saved by `checkpoint` at `path`."""
+        return cls._of(_native.CoSim.resume(os.fspath(path)))
+
+    @property
+    def now(self) -> float:
+        """Simulated time reached [s]."""
+        return self._sim.now
+
+    @property
+    def duration(self) -> float:
+        """The scenario's end [s]."""
+        return self._sim.duration
+
+    @property
+    def finished(self) -> bool:
+        """Whether the scenario's end is reached."""
+        return self._sim.finished
+
+    @property
+    def channels(self) -> List[str]:
+        """The channels' names, in the scenario's order."""
+        return self._sim.channels
+
+    @property
+    def periods(self) -> List[float]:
+        """The periods the channels run at [s] (achieved)."""
+        return self._sim.periods
+
+    @property
+    def requested(self) -> List[float]:
+        """The periods last asked for [s]."""
+        return self._sim.requested
+
+    @property
+    def digest(self) -> str:
+        """The digest of everything recorded so far."""
+        return self._sim.digest
+
+    def advance(self, t: float) -> None:
+        """Advances to `t` [s] (at most `duration`), closing the measurement window
+        that ends at `t`. Raises `DsmcosimError` on divergence."""
+        self._sim.advance(float(t))
+
+    def set_periods(self, periods: List[float]) -> List[float]:
+        """Sets every channel's period [s] from now on; returns the achieved ones."""
+        return self._sim.set_periods([float(p) for p in periods])
+
+    def window_cost(self) -> Optional[tuple]:
+        """`(t_end, cost)` of the last closed measurement window ([s], [m]), or None."""
+        return self._sim.window_cost()
+
+    def fork(self) -> "CoSim":
+        """An independent copy: what is done to it leaves this one as it was."""
+        return CoSim._of(self._sim.fork())
+
+    def checkpoint(self, out: Union[str, "os.PathLike[str]"]) -> Path:
+        """Writes a checkpoint into `out/checkpoints/` and returns its path."""
+        return Path(self._sim.checkpoint(os.fspath(out)))
+
+    def __repr__(self) -> str:
+        return f"CoSim(now={self.now:g} s of {self.duration:g} s, periods={self.periods})"

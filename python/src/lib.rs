@@ -7,9 +7,12 @@
 
 use std::path::{Path, PathBuf};
 
+use dsmcosim::cosim::CoSim;
+use dsmcosim::kernel::SimTime;
 use dsmcosim::run::plan::RunPlan;
 use dsmcosim::run::RunOptions;
 use dsmcosim::scenario::{overrides, Scenario};
+use dsmcosim::trace::Recorder;
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
 
@@ -149,6 +152,233 @@ fn sweep(
     result.map_err(|e| py_error(py, e))
 }
 
+/// A co-simulation steered from Python window by window: the same world the command
+/// line runs, with a recorder that digests every step (no files), so a steered run has
+/// a digest comparable with the command line's.
+#[pyclass(name = "CoSim", module = "dsmcosim")]
+struct PyCoSim {
+    world: CoSim,
+    recorder: Recorder,
+}
+
+/// Simulated time [s] as the kernel's nanoseconds, or an error naming `what`.
+fn sim_time(what: &str, seconds: f64) -> dsmcosim::Result<SimTime> {
+    SimTime::from_secs_f64(seconds).ok_or_else(|| {
+        dsmcosim::Error::invalid(what, format!("must be a time ≥ 0 s (got {seconds})"))
+    })
+}
+
+impl PyCoSim {
+    fn build(scenario: &Scenario) -> dsmcosim::Result<PyCoSim> {
+        if scenario.controller.is_some() {
+            return Err(dsmcosim::Error::invalid(
+                "controller",
+                "a CoSim is steered from Python: give a scenario without a controller \
+                 (its channels' tau are the periods it starts at)",
+            ));
+        }
+        dsmcosim::run::preflight(scenario, &RunOptions::default())?;
+        let recorder = Recorder::for_scenario(None, scenario)
+            .map_err(|e| dsmcosim::Error::io(Path::new("<recorder>"), e))?;
+        Ok(PyCoSim {
+            world: CoSim::new(scenario),
+            recorder,
+        })
+    }
+
+    /// An independent copy: the world cloned, the recorder's digest chains copied.
+    fn copy(&self) -> dsmcosim::Result<PyCoSim> {
+        let bytes = postcard::to_stdvec(&self.recorder)
+            .map_err(|e| dsmcosim::Error::invalid("fork", e.to_string()))?;
+        let recorder = postcard::from_bytes(&bytes)
+            .map_err(|e| dsmcosim::Error::invalid("fork", e.to_string()))?;
+        Ok(PyCoSim {
+            world: self.world.clone(),
+            recorder,
+        })
+    }
+}
+
+#[pymethods]
+impl PyCoSim {
+    /// Builds a co-simulation from a scenario file (`path`) or JSON `text`, with
+    /// `--set` overrides; the package's `dsmcosim.CoSim(...)` calls it.
+    #[new]
+    #[pyo3(signature = (sets, path=None, text=None, base_dir=None))]
+    fn new(
+        py: Python<'_>,
+        sets: Vec<String>,
+        path: Option<PathBuf>,
+        text: Option<String>,
+        base_dir: Option<PathBuf>,
+    ) -> PyResult<PyCoSim> {
+        let built = py.detach(|| {
+            let (scenario, _) = load(path.as_deref(), text.as_deref(), base_dir.as_deref(), &sets)?;
+            PyCoSim::build(&scenario)
+        });
+        built.map_err(|e| py_error(py, e))
+    }
+
+    /// Resumes a co-simulation from a checkpoint file written by `checkpoint`.
+    #[staticmethod]
+    fn resume(py: Python<'_>, path: PathBuf) -> PyResult<PyCoSim> {
+        let cp = py.detach(|| dsmcosim::checkpoint::read(&path));
+        let cp = cp.map_err(|e| py_error(py, e))?;
+        if cp.controller.is_some() {
+            return Err(py_error(
+                py,
+                dsmcosim::Error::invalid(
+                    path.display().to_string(),
+                    "is a controlled run's checkpoint (resume it with `dsmcosim resume`)",
+                ),
+            ));
+        }
+        Ok(PyCoSim {
+            world: cp.world,
+            recorder: cp.recorder,
+        })
+    }
+
+    /// Simulated time reached [s].
+    #[getter]
+    fn now(&self) -> f64 {
+        self.world.now().as_secs_f64()
+    }
+
+    /// The scenario's end [s].
+    #[getter]
+    fn duration(&self) -> f64 {
+        self.world.scenario().duration.as_secs_f64()
+    }
+
+    /// The channels' names, in the scenario's order.
+    #[getter]
+    fn channels(&self) -> Vec<String> {
+        self.world
+            .channels()
+            .iter()
+            .map(|c| c.spec.name.clone())
+            .collect()
+    }
+
+    /// The periods each channel runs at [s] (achieved; on TDMA what the list in force
+    /// serves).
+    #[getter]
+    fn periods(&self) -> Vec<f64> {
+        self.world
+            .channels()
+            .iter()
+            .map(|c| c.tau.as_secs_f64())
+            .collect()
+    }
+
+    /// The periods last asked for [s].
+    #[getter]
+    fn requested(&self) -> Vec<f64> {
+        self.world.channels().iter().map(|c| c.requested).collect()
+    }
+
+    /// The digest of everything recorded so far (hex): at the scenario's end, the same
+    /// as the command line's run of the same scenario with the same decisions.
+    #[getter]
+    fn digest(&self) -> String {
+        self.recorder.digest()
+    }
+
+    /// Whether the scenario's end is reached.
+    #[getter]
+    fn finished(&self) -> bool {
+        self.world.finished()
+    }
+
+    /// Advances to `t` [s] (at most the scenario's end): every event before `t`, and
+    /// the measurement window ending at `t`; at the end, everything left (the last
+    /// step). Raises on divergence.
+    fn advance(&mut self, py: Python<'_>, t: f64) -> PyResult<()> {
+        let (world, recorder) = (&mut self.world, &mut self.recorder);
+        let done = py.detach(|| -> dsmcosim::Result<()> {
+            let target = sim_time("t", t)?;
+            if target < world.now() || target > world.scenario().duration {
+                return Err(dsmcosim::Error::invalid(
+                    "t",
+                    format!(
+                        "must lie in [now, duration] = [{}, {}] s (got {t})",
+                        world.now().as_secs_f64(),
+                        world.scenario().duration.as_secs_f64()
+                    ),
+                ));
+            }
+            if target == world.scenario().duration {
+                // The end: the step at `duration` too, as a run to its end takes it.
+                world.run_to_end(recorder)
+            } else {
+                world.advance_to(target, recorder)
+            }
+        });
+        done.map_err(|e| py_error(py, e))
+    }
+
+    /// Sets every channel's period [s] from now on, as the controller does at a window
+    /// boundary; returns the periods achieved (an ideal channel runs the request to the
+    /// nanosecond, at least one step; a TDMA network what its new slot list serves).
+    fn set_periods(&mut self, py: Python<'_>, periods: Vec<f64>) -> PyResult<Vec<f64>> {
+        let n = self.world.channels().len();
+        let dt = self.world.scenario().dt;
+        let checked = (|| -> dsmcosim::Result<Vec<SimTime>> {
+            if periods.len() != n {
+                return Err(dsmcosim::Error::invalid(
+                    "periods",
+                    format!("needs one per channel, {n} (got {})", periods.len()),
+                ));
+            }
+            periods
+                .iter()
+                .enumerate()
+                .map(|(i, &p)| {
+                    let t = sim_time(&format!("periods[{i}]"), p)?;
+                    Ok(SimTime(t.0.max(dt.0)))
+                })
+                .collect()
+        })();
+        let achieved = checked.map_err(|e| py_error(py, e))?;
+        let now = self.world.now();
+        let set = self.world.set_taus(now, &periods, &achieved).map_err(|e| {
+            py_error(
+                py,
+                dsmcosim::Error::invalid(
+                    "periods",
+                    format!("the TDMA cycle cannot serve them: {e}"),
+                ),
+            )
+        })?;
+        Ok(set.iter().map(|t| t.as_secs_f64()).collect())
+    }
+
+    /// The last closed measurement window: `(t_end [s], cost [m])`, or None before the
+    /// first (the scenario's `measurement.period` sets the windows).
+    fn window_cost(&self) -> Option<(f64, f64)> {
+        self.world
+            .epochs()
+            .last()
+            .map(|e| (e.t_end.as_secs_f64(), e.cost))
+    }
+
+    /// An independent copy to try something on: advancing or steering it leaves this
+    /// one as it was.
+    fn fork(&self, py: Python<'_>) -> PyResult<PyCoSim> {
+        py.detach(|| self.copy()).map_err(|e| py_error(py, e))
+    }
+
+    /// Writes a checkpoint of the co-simulation as it is now into `out/checkpoints/`
+    /// and returns its path (resume it with `CoSim.resume`).
+    fn checkpoint(&self, py: Python<'_>, out: PathBuf) -> PyResult<PathBuf> {
+        let written = py.detach(|| {
+            dsmcosim::checkpoint::write(&out, self.world.now(), &self.world, &self.recorder, None)
+        });
+        written.map_err(|e| py_error(py, e))
+    }
+}
+
 /// The native module.
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -157,5 +387,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(validate, m)?)?;
     m.add_function(wrap_pyfunction!(sweep, m)?)?;
+    m.add_class::<PyCoSim>()?;
     Ok(())
 }

@@ -154,3 +154,84 @@ def test_runs_on_threads_give_the_same_digests(tmp_path):
     for t in threads:
         t.join(timeout=600)
     assert digests == [alone, alone]
+
+
+FIXED = SCENARIOS / "grid16_space_fixed.json"
+
+
+def test_a_steered_run_that_keeps_its_periods_gives_the_command_lines_digest(tmp_path):
+    sim = dsmcosim.CoSim(FIXED, duration=3.0)
+    assert sim.channels == ["tau1", "tau2"] and sim.periods == [0.005, 0.005]
+    costs = []
+    while not sim.finished:
+        sim.advance(sim.now + 1.0)
+        costs.append(sim.window_cost())
+    cli = cli_run(FIXED, tmp_path, "/duration=3.0")
+    assert sim.digest == cli["digest"]
+    epochs = pd.read_csv(tmp_path / "epochs.csv")
+    assert [c[0] for c in costs] == [1.0, 2.0, 3.0]
+    assert [c[1] for c in costs] == list(epochs["cost"]), "the windows the CLI measured"
+
+
+def test_periods_set_at_the_start_give_the_digest_of_the_file_holding_them(tmp_path):
+    """A Python controller's decision is the same run as the scenario that holds it:
+    setting (4, 6) ms at t = 0 gives the digest of the file with those channel taus."""
+    sim = dsmcosim.CoSim(FIXED, duration=2.0)
+    assert sim.set_periods([0.004, 0.006]) == [0.004, 0.006]
+    sim.advance(2.0)
+    cli = cli_run(FIXED, tmp_path, "/duration=2.0", "/channels/0/tau=0.004",
+                  "/channels/1/tau=0.006")
+    assert sim.digest == cli["digest"]
+
+
+def test_same_decisions_give_the_same_digest_and_other_decisions_another():
+    def steered(schedule):
+        sim = dsmcosim.CoSim(FIXED, duration=3.0)
+        for periods in schedule:
+            sim.set_periods(periods)
+            sim.advance(sim.now + 1.0)
+        return sim.digest
+
+    a = [[0.005, 0.005], [0.003, 0.008], [0.0045, 0.0055]]
+    assert steered(a) == steered(a)
+    assert steered(a) != steered([[0.005, 0.005], [0.008, 0.003], [0.0045, 0.0055]])
+
+
+def test_a_fork_leaves_the_run_it_came_from_untouched():
+    plain = dsmcosim.CoSim(FIXED, duration=2.0)
+    plain.advance(2.0)
+    sim = dsmcosim.CoSim(FIXED, duration=2.0)
+    sim.advance(1.0)
+    trial = sim.fork()
+    trial.set_periods([0.02, 0.02])
+    trial.advance(2.0)
+    sim.advance(2.0)
+    assert sim.digest == plain.digest
+    assert trial.digest != sim.digest
+    assert trial.window_cost() != sim.window_cost()
+
+
+def test_a_checkpoint_resumes_to_the_same_digest(tmp_path):
+    sim = dsmcosim.CoSim(FIXED, duration=3.0)
+    sim.set_periods([0.004, 0.007])
+    sim.advance(1.0)
+    path = sim.checkpoint(tmp_path)
+    sim.advance(3.0)
+    resumed = dsmcosim.CoSim.resume(path)
+    assert resumed.now == 1.0 and resumed.periods == [0.004, 0.007]
+    resumed.advance(3.0)
+    assert resumed.digest == sim.digest
+
+
+def test_steering_errors_name_what_is_wrong():
+    sim = dsmcosim.CoSim(FIXED, duration=2.0)
+    with pytest.raises(dsmcosim.DsmcosimError) as e:
+        sim.set_periods([0.005])
+    assert e.value.field == "periods"
+    sim.advance(1.0)
+    with pytest.raises(dsmcosim.DsmcosimError) as e:
+        sim.advance(0.5)
+    assert e.value.field == "t"
+    with pytest.raises(dsmcosim.DsmcosimError) as e:
+        dsmcosim.CoSim(SCENARIOS / "grid16_space_cp.json")
+    assert e.value.field == "controller"
