@@ -660,13 +660,7 @@ pub fn execute(command: Command) -> crate::Result<()> {
                 let plan = crate::run::plan::plan(&s)?;
                 say!("{}: {}", scenario.display(), plan.text());
             }
-            let result = crate::run::run_with(&s, &out, options);
-            // The run directory keeps the scenario it ran, overrides applied (also
-            // beside a diverged run's outputs, which are a result too).
-            if result.is_ok() || matches!(result, Err(crate::Error::Diverged(_))) {
-                crate::output::write_atomic(&out.join("scenario.json"), text.as_bytes())?;
-            }
-            let outcome = result?;
+            let outcome = crate::run::run_keeping_scenario(&s, &text, &out, options)?;
             report(&s.name, &outcome, &out);
             Ok(())
         }

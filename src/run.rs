@@ -148,6 +148,22 @@ pub fn run_with(scenario: &Scenario, out: &Path, options: RunOptions) -> Result<
     stale_removed(&dir, result)
 }
 
+/// Runs `scenario` as [`run_with`] does and keeps `text`, the scenario as run (overrides
+/// applied), as `out/scenario.json`: beside a finished run's outputs and beside a
+/// diverged run's, which are a result too. `dsmcosim run` and the Python package call it.
+pub fn run_keeping_scenario(
+    scenario: &Scenario,
+    text: &str,
+    out: &Path,
+    options: RunOptions,
+) -> Result<Outcome> {
+    let result = run_with(scenario, out, options);
+    if result.is_ok() || matches!(result, Err(Error::Diverged(_))) {
+        write_atomic(&out.join("scenario.json"), text.as_bytes())?;
+    }
+    result
+}
+
 /// `result`, after removing the previous run's outputs this run did not replace (only
 /// once this run's summary.json is written, [`crate::output::run_dir::RunDir::remove_stale`]).
 fn stale_removed(dir: &crate::output::run_dir::RunDir, result: Result<Outcome>) -> Result<Outcome> {

@@ -87,11 +87,8 @@ fn run(
             force,
             ..RunOptions::default()
         };
-        let result = dsmcosim::run::run_with(&scenario, &out, options);
-        if result.is_ok() || matches!(result, Err(dsmcosim::Error::Diverged(_))) {
-            dsmcosim::output::write_atomic(&out.join("scenario.json"), text.as_bytes())?;
-        }
-        result.map(|outcome| outcome.digest)
+        dsmcosim::run::run_keeping_scenario(&scenario, &text, &out, options)
+            .map(|outcome| outcome.digest)
     });
     result.map_err(|e| py_error(py, e))
 }
