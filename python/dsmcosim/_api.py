@@ -35,15 +35,16 @@ def _sets(overrides: Mapping[str, Any], set: Optional[Mapping[str, Any]]) -> Lis
 
 
 def _source(scenario: Scenario, base_dir: Optional[Union[str, "os.PathLike[str]"]]):
-    """The keyword arguments that name the scenario to the native module."""
+    """The scenario as the native module takes it: a dict of `path`, `text` and
+    `base_dir` (the one not used is None)."""
     if isinstance(scenario, Mapping):
         base = os.fspath(base_dir) if base_dir is not None else os.getcwd()
-        return {"text": json.dumps(scenario), "base_dir": base}
+        return {"path": None, "text": json.dumps(scenario), "base_dir": base}
     if isinstance(scenario, (str, os.PathLike)):
         if base_dir is not None:
             raise ValueError("base_dir is for a scenario given as a dict; a file's "
                              "relative paths are read from its own directory")
-        return {"path": os.fspath(scenario)}
+        return {"path": os.fspath(scenario), "text": None, "base_dir": None}
     raise TypeError(f"a scenario is a path or a dict, not {type(scenario).__name__}")
 
 
@@ -100,7 +101,7 @@ def run(scenario: Scenario, out: Optional[Union[str, "os.PathLike[str]"]] = None
     keep = out is not None
     directory = Path(out) if keep else Path(tempfile.mkdtemp(prefix="dsmcosim-run-"))
     try:
-        _native.run(out=os.fspath(directory), sets=sets, force=force, **source)
+        _native.run(source, os.fspath(directory), sets, force)
         return Run(directory, keep)
     finally:
         if not keep:
@@ -115,7 +116,7 @@ def validate(scenario: Scenario, *, set: Optional[Mapping[str, Any]] = None,
     delays, the network, the coupling, the size of the run). Overrides as for `run`.
     Raises `DsmcosimError` naming the field of bad input."""
     sets = _sets(overrides, set)
-    return json.loads(_native.validate(sets=sets, **_source(scenario, base_dir)))
+    return json.loads(_native.validate(_source(scenario, base_dir), sets))
 
 
 def sweep(sweep_file: Union[str, "os.PathLike[str]"], out: Union[str, "os.PathLike[str]"], *,
@@ -156,7 +157,7 @@ class CoSim:
 
     def __init__(self, scenario: Scenario, *, set: Optional[Mapping[str, Any]] = None,
                  base_dir: Optional[Union[str, "os.PathLike[str]"]] = None, **overrides: Any):
-        self._sim = _native.CoSim(_sets(overrides, set), **_source(scenario, base_dir))
+        self._sim = _native.CoSim(_source(scenario, base_dir), _sets(overrides, set))
 
     @classmethod
     def _of(cls, sim) -> "CoSim":

@@ -45,19 +45,23 @@ fn py_error(py: Python<'_>, e: dsmcosim::Error) -> PyErr {
     err
 }
 
-/// The scenario of a file (`path`) or of JSON `text` (relative FMU paths then read from
-/// `base_dir`), with the `--set` overrides `sets` applied, and its text.
-fn load(
-    path: Option<&Path>,
-    text: Option<&str>,
-    base_dir: Option<&Path>,
-    sets: &[String],
-) -> dsmcosim::Result<(Scenario, String)> {
-    match (path, text) {
+/// Where a scenario comes from, as the package passes it (a dict with all three keys):
+/// a file (`path`), or JSON `text` whose relative FMU paths are read from `base_dir`.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+struct Source {
+    path: Option<PathBuf>,
+    text: Option<String>,
+    base_dir: Option<PathBuf>,
+}
+
+/// The scenario of `source` with the `--set` overrides `sets` applied, and its text.
+fn load(source: &Source, sets: &[String]) -> dsmcosim::Result<(Scenario, String)> {
+    match (&source.path, &source.text) {
         (Some(path), _) => overrides::load_with(path, sets),
         (None, Some(text)) => {
             // parse_at reads relative paths from the directory of the file it is given.
-            let beside = base_dir.map(|d| d.join("scenario.json"));
+            let beside = source.base_dir.as_ref().map(|d| d.join("scenario.json"));
             overrides::text_with(text, "<scenario>", beside.as_deref(), sets)
         }
         (None, None) => Err(dsmcosim::Error::invalid(
@@ -71,18 +75,15 @@ fn load(
 /// as run included) and returns the run's digest. A run that diverged raises, its
 /// outputs up to the divergence written.
 #[pyfunction]
-#[pyo3(signature = (out, sets, force, path=None, text=None, base_dir=None))]
 fn run(
     py: Python<'_>,
+    source: Source,
     out: PathBuf,
     sets: Vec<String>,
     force: bool,
-    path: Option<PathBuf>,
-    text: Option<String>,
-    base_dir: Option<PathBuf>,
 ) -> PyResult<String> {
     let result = py.detach(|| -> dsmcosim::Result<String> {
-        let (scenario, text) = load(path.as_deref(), text.as_deref(), base_dir.as_deref(), &sets)?;
+        let (scenario, text) = load(&source, &sets)?;
         let options = RunOptions {
             force,
             ..RunOptions::default()
@@ -96,16 +97,9 @@ fn run(
 /// The plan of a scenario (what `dsmcosim validate --json` writes), as JSON text,
 /// after every check a run makes before it starts.
 #[pyfunction]
-#[pyo3(signature = (sets, path=None, text=None, base_dir=None))]
-fn validate(
-    py: Python<'_>,
-    sets: Vec<String>,
-    path: Option<PathBuf>,
-    text: Option<String>,
-    base_dir: Option<PathBuf>,
-) -> PyResult<String> {
+fn validate(py: Python<'_>, source: Source, sets: Vec<String>) -> PyResult<String> {
     let result = py.detach(|| -> dsmcosim::Result<String> {
-        let (scenario, _) = load(path.as_deref(), text.as_deref(), base_dir.as_deref(), &sets)?;
+        let (scenario, _) = load(&source, &sets)?;
         dsmcosim::run::preflight(&scenario, &RunOptions::default())?;
         let plan: RunPlan = dsmcosim::run::plan::plan(&scenario)?;
         serde_json::to_string(&plan).map_err(|e| dsmcosim::Error::invalid("plan", e.to_string()))
@@ -198,19 +192,12 @@ impl PyCoSim {
 
 #[pymethods]
 impl PyCoSim {
-    /// Builds a co-simulation from a scenario file (`path`) or JSON `text`, with
-    /// `--set` overrides; the package's `dsmcosim.CoSim(...)` calls it.
+    /// Builds a co-simulation from a scenario `source` with `--set` overrides; the
+    /// package's `dsmcosim.CoSim(...)` calls it.
     #[new]
-    #[pyo3(signature = (sets, path=None, text=None, base_dir=None))]
-    fn new(
-        py: Python<'_>,
-        sets: Vec<String>,
-        path: Option<PathBuf>,
-        text: Option<String>,
-        base_dir: Option<PathBuf>,
-    ) -> PyResult<PyCoSim> {
+    fn new(py: Python<'_>, source: Source, sets: Vec<String>) -> PyResult<PyCoSim> {
         let built = py.detach(|| {
-            let (scenario, _) = load(path.as_deref(), text.as_deref(), base_dir.as_deref(), &sets)?;
+            let (scenario, _) = load(&source, &sets)?;
             PyCoSim::build(&scenario)
         });
         built.map_err(|e| py_error(py, e))
