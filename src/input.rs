@@ -6,6 +6,8 @@
 //! [`MAX_INPUT_BYTES`] and refuses the file naming it (bad input, exit 2); a file that
 //! cannot be read at all is an I/O error (exit 1) as before.
 
+pub mod pointer;
+
 use std::io::Read;
 use std::path::Path;
 

@@ -3,7 +3,9 @@
 
 pub mod channel;
 pub mod message;
+pub mod route;
 pub mod tdma;
 
 pub use channel::Channel;
 pub use message::{LineSample, Message, Payload};
+pub use route::Route;

@@ -70,7 +70,9 @@ pub mod exec;
 pub mod file;
 pub mod merge;
 pub mod plots;
-pub mod pointer;
+/// JSON pointers live with the input files they address ([`crate::input::pointer`]);
+/// re-exported under their old path.
+pub use crate::input::pointer;
 pub mod points;
 pub mod record;
 pub mod table;

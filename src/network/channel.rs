@@ -3,8 +3,8 @@
 //! rate) and delivers each sample after its latency; the receiver holds a value until
 //! the next arrival.
 
+use super::route::Route;
 use crate::kernel::SimTime;
-use crate::partition::layout::Route;
 use crate::scenario::model::ChannelSpec;
 
 /// A channel's configuration and the routes it carries.

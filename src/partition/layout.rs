@@ -2,22 +2,9 @@
 
 use crate::scenario::model::{DataKind, Scenario};
 
-/// A message route: a kind of data about one body (or link) from one node to another.
-#[derive(
-    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
-)]
-pub struct Route {
-    /// What is sent.
-    pub kind: DataKind,
-    /// Sending node (0-based).
-    pub from: usize,
-    /// Receiving node (0-based).
-    pub to: usize,
-    /// The body concerned (global index): the ghosted body for both kinds.
-    pub body: usize,
-    /// For [`DataKind::Force`], the border link (global index) whose force is sent.
-    pub link: Option<usize>,
-}
+/// A message route; defined with the messages it labels ([`crate::network::Route`]), and
+/// built here from the partitioning.
+pub use crate::network::Route;
 
 /// Who owns what, and what flows where.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]

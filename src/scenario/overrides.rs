@@ -15,7 +15,7 @@ use serde_json::Value;
 
 use super::model::Scenario;
 use crate::error::{Error, Result};
-use crate::sweep::pointer::Pointer;
+use crate::input::pointer::Pointer;
 
 /// Most `--set` overrides on one command line.
 pub const MAX_OVERRIDES: usize = 1000;

@@ -7,8 +7,8 @@ use std::collections::BTreeMap;
 pub use super::config::transmission_time;
 use super::config::TdmaConfig;
 use super::tdma_node;
+use crate::network::route::Route;
 use crate::network::Channel;
-use crate::partition::layout::Route;
 use crate::scenario::model::{Coupling, DataKind};
 
 /// Bytes per `f64` on the wire.
