@@ -319,8 +319,8 @@ impl PyCoSim {
                 .iter()
                 .enumerate()
                 .map(|(i, &p)| {
-                    let t = sim_time(&format!("periods[{i}]"), p)?;
-                    Ok(SimTime(t.0.max(dt.0)))
+                    sim_time(&format!("periods[{i}]"), p)?;
+                    Ok(dsmcosim::network::channel::achieved_period(p, dt))
                 })
                 .collect()
         })();

@@ -77,9 +77,8 @@ impl Delays {
     /// of its period, so its average rate is the requested one (a TDMA network replaces
     /// these by what its slot list achieves).
     pub fn achieved(&self, taus: &[f64]) -> Vec<SimTime> {
-        let dt = self.dt.as_nanos();
         taus.iter()
-            .map(|&t| SimTime(((t * 1e9).round() as u64).max(dt)))
+            .map(|&t| crate::network::channel::achieved_period(t, self.dt))
             .collect()
     }
 

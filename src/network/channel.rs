@@ -27,6 +27,13 @@ pub struct Channel {
     pub taken: u64,
 }
 
+/// The period an ideal channel runs a requested delay `tau` [s] at: the request to the
+/// nanosecond, at least one step `dt`. The channel samples at the first step at or
+/// after each multiple of it, so its average rate is the requested one.
+pub fn achieved_period(tau: f64, dt: SimTime) -> SimTime {
+    SimTime(((tau * 1e9).round() as u64).max(dt.as_nanos()))
+}
+
 impl Channel {
     /// A channel at its scenario period, carrying the routes it matches.
     pub fn new(spec: &ChannelSpec, all_routes: &[Route]) -> Channel {
