@@ -1,28 +1,32 @@
 #!/usr/bin/env python3
-"""A delay controller written in Python against the thesis's space CP, compared with the
-DSM and with equal delays, paired over windows (docs/python.md, "Your own controller
-against the DSM").
+"""A delay controller written in Python against the DSM on the thesis's space CP,
+paired window against window from the same states (docs/python.md, "Your own
+controller against the DSM").
 
-The scene is scenarios/grid16_space_cp.json (the thesis's 4x4 net on 4 nodes, body 1
-driven over [0, 12) s and body 16 over [12, 24) s, 30 s, windows of 1 s) without its
-controller: Python is the controller. The constrained problem is the thesis's: the
-controller moves tau1, and tau2 = 1 / (400 Hz - 1/tau1) takes the rest of the budget, so
-tau1 lies in [2.63, 50] ms. Every window, from the live state:
+The scene is scenarios/grid16_space_cp_ds2.json: the thesis's 4x4 net on 4 nodes, body
+1 driven over [0, 12) s and body 16 over [12, 24) s, 30 s in windows of 1 s, the
+constrained problem (the controller moves tau1, and tau2 = 1 / (400 Hz - 1/tau1) takes
+the rest of the budget, so tau1 lies in [2.63, 50] ms), and the DSM with a 2-ms simplex.
 
-- scipy's bounded scalar minimizer (Brent's method, `minimize_scalar`, at most 12
-  evaluations, tolerance 0.25 ms) chooses tau1, each evaluation the window's cost on a
-  fork of the whole co-simulation (lookahead, as the DSM's candidates are measured); a
-  candidate that diverges within the window scores 10 m, and if every try diverged the
-  live run takes equal delays;
-- no optimization (5, 5 ms) and the grid optimum (tau1 on the 1 ms grid) are measured on
-  forks of the same state, over the same window;
-- the live run then goes on at scipy's choice.
+1. The DSM runs through the package exactly as `dsmcosim run` runs it (lookahead: each
+   candidate measured on a fork; the grid, no-optimization and other baselines measured
+   beside it). Its epochs.csv holds every window's decision and cost.
+2. The same scene without its controller is then steered from Python along the DSM's
+   decisions (`CoSim.set_periods` at each window boundary), so the live state at every
+   window start is the DSM's own: the script checks that each replayed window costs what
+   the DSM's run measured, to the bit, and that no optimization measured here on a fork
+   costs what the run's own baseline measured, to the bit.
+3. In every window, from that state, scipy's bounded scalar minimizer (Brent's method,
+   `minimize_scalar`, at most 12 evaluations, tolerance 0.25 ms) chooses tau1, each
+   evaluation the window's cost on a fork of the whole co-simulation (as the DSM's
+   candidates are measured); a candidate that diverges within the window scores 10 m,
+   and if every try diverged scipy's choice is equal delays.
 
-So scipy is compared with no optimization and with the grid on the same windows, from
-the same states, exactly as `dsmcosim run` compares the DSM with its baselines; the DSM's
-own comparisons are read from the stored run results/grid16_space_cp_ds2 (D_s 2 ms) and
-results/grid16_space_cp (the thesis's D_s 12 ms). The DSM and scipy each drive their own
-live run, so they are compared through the same baselines, not window against window.
+So scipy and the DSM are compared window against window, from the same states over the
+same windows, exactly as `dsmcosim run` compares the DSM with its baselines; each is also
+compared with no optimization and with the grid optimum (the run's 1-ms grid) of the same
+windows. At the end the replay's decisions, `CoSim.schedule()`, are run through the
+command line's path as a scenario `schedule`: its dynamics digest is the DSM run's.
 
 Needs the package (`pip install .`) and scipy. Run from the checkout:
 
@@ -81,56 +85,62 @@ def paired(a, b):
             f"95 % CI [{mean - half:+.4f}, {mean + half:+.4f}] m, sign test p {p:.3g}: {verdict}")
 
 
-def stored(run, baseline):
-    """The DSM's paired comparison from a stored run's summary.json, in the same words."""
-    p = json.loads((REPO / "results" / run / "summary.json").read_text())["paired"][baseline]
-    lo, hi = p["ci95"]
-    return (f"ratio {p['ratio']:.3f} ({p['wins']}/{p['n']} windows won, {p['losses']} lost), "
-            f"mean difference 95 % CI [{lo:+.4f}, {hi:+.4f}] m, sign test p "
-            f"{p['sign_test_p']:.3g}: {p['verdict'].replace('_', ' ')}")
-
-
 def main():
-    doc = json.loads((REPO / "scenarios" / "grid16_space_cp.json").read_text())
+    scene = REPO / "scenarios" / "grid16_space_cp_ds2.json"
+    dsm = dsmcosim.run(scene)
+    epochs = dsm.epochs
+    doc = json.loads(scene.read_text())
     del doc["controller"]
     doc["name"] = "grid16_space_cp_python"
     sim = dsmcosim.CoSim(doc, base_dir=REPO / "scenarios")
-    grid = [round(LOW + 0.0005, 4)] + [k / 1000 for k in range(3, 51)]
-    rows = []
-    print("window [s] | scipy tau1 [ms] (evaluations) | scipy cost [m] | no-opt [m] | "
-          "grid optimum tau1 [ms], cost [m]")
-    while not sim.finished:
-        t_end = sim.now + 1.0
+    rows, evaluations = [], []
+    print("window [s] | DSM tau1 [ms], cost [m] | scipy tau1 [ms] (evaluations), cost [m] | "
+          "no-opt [m] | grid optimum tau1 [ms], cost [m]")
+    for w in epochs.itertuples():
+        start, t_end = float(w.t_start), float(w.t_end)
+        assert sim.now == start, (sim.now, start)
         found = minimize_scalar(lambda x: measure(sim, t_end, x), bounds=(LOW, TAU_MAX),
                                 method="bounded", options={"xatol": 2.5e-4, "maxiter": 12})
-        tau1 = float(found.x)
-        if found.fun >= PENALTY:
+        tau1, scipy_cost = float(found.x), float(found.fun)
+        if scipy_cost >= PENALTY:
             tau1 = 0.005                     # every try diverged: fall back to equal delays
-        costs = {g: measure(sim, t_end, g) for g in grid}
-        best = min(costs, key=costs.get)
+            scipy_cost = measure(sim, t_end, tau1)
         no_opt = measure(sim, t_end, 0.005)
-        start = sim.now
-        sim.set_periods([tau1, partner(tau1)])
-        try:
-            sim.advance(t_end)
-        except dsmcosim.DsmcosimError as e:
-            print(f"{start:g}–{t_end:g} | {tau1 * 1e3:.2f} ({found.nfev}) | the live run "
-                  f"diverged: {e} | {no_opt:.4f} | {best * 1e3:g}, {costs[best]:.4f}")
-            break
+        if no_opt != w.objective_no_opt:
+            raise SystemExit(f"window {start:g}: no optimization measured here, {no_opt!r}, "
+                             f"is not the run's baseline, {w.objective_no_opt!r}")
+        sim.set_periods([w.tau_tau1_requested, w.tau_tau2_requested])
+        sim.advance(t_end)
         live = sim.window_cost()[1]
-        rows.append((live, no_opt, costs[best]))
-        print(f"{start:g}–{t_end:g} | {tau1 * 1e3:.2f} ({found.nfev}) | {live:.4f} | "
-              f"{no_opt:.4f} | {best * 1e3:g}, {costs[best]:.4f}")
-    live, no_opt, grid_best = zip(*rows)
+        if live != w.cost:
+            raise SystemExit(f"window {start:g}: the replay costs {live!r}, the DSM's run "
+                             f"measured {w.cost!r}")
+        rows.append((live, scipy_cost, no_opt, w.objective_grid))
+        evaluations.append(found.nfev)
+        print(f"{start:g}–{t_end:g} | {w.tau_tau1_requested * 1e3:.2f}, {live:.4f} | "
+              f"{tau1 * 1e3:.2f} ({found.nfev}), {scipy_cost:.4f} | {no_opt:.4f} | "
+              f"{w.grid_opt_tau_tau1 * 1e3:g}, {w.objective_grid:.4f}")
+    if not sim.finished:
+        sim.advance(sim.duration)
+    dsm_cost, scipy_cost, no_opt, grid_best = zip(*rows)
     print()
-    print(f"digest of the scipy-driven run: {sim.digest}")
-    print("scipy vs no optimization:", paired(live, no_opt))
-    print("scipy vs the grid optimum:", paired(live, grid_best))
-    for run, label in (("grid16_space_cp_ds2", "DSM, D_s 2 ms"),
-                       ("grid16_space_cp", "DSM, D_s 12 ms (the thesis's)")):
-        print(f"{label} vs no optimization (stored run {run}):", stored(run, "no_opt"))
-        print(f"{label} vs the grid optimum (stored run {run}):", stored(run, "grid"))
-    return 0
+    print("Every replayed window cost what the DSM's run measured, and no optimization "
+          "what its baseline measured, to the bit.")
+    print("scipy vs the DSM, window against window:", paired(scipy_cost, dsm_cost))
+    print("scipy vs no optimization:", paired(scipy_cost, no_opt))
+    print("the DSM vs no optimization:", paired(dsm_cost, no_opt))
+    print("scipy vs the grid optimum:", paired(scipy_cost, grid_best))
+    print("the DSM vs the grid optimum:", paired(dsm_cost, grid_best))
+    print(f"measurements a window: scipy {sum(evaluations) / len(evaluations):.1f} on "
+          f"average ({min(evaluations)}–{max(evaluations)}), the DSM "
+          f"{epochs['measurements'].mean():.1f} on average")
+    doc["schedule"] = sim.schedule()
+    replayed = dsmcosim.run(doc, base_dir=REPO / "scenarios")
+    same = replayed.summary["dynamics_digest"] == dsm.summary["dynamics_digest"]
+    print(f"the DSM's decisions as a scenario schedule: dynamics digest "
+          f"{replayed.summary['dynamics_digest'][:16]}…, the DSM run's "
+          f"{dsm.summary['dynamics_digest'][:16]}…: {'the same' if same else 'DIFFERENT'}")
+    return 0 if same else 1
 
 
 if __name__ == "__main__":

@@ -206,8 +206,13 @@ fn finish(
     // worker (which then takes a share of the nodes itself) instead of handing each of
     // its three parallel regions per step to the pool and sleeping until they are done:
     // a 64×64 grid on 16 nodes runs 15 % faster on 2 threads (docs/performance.md).
-    let result =
-        rayon::scope(|_| drive(out, &mut world, &mut recorder, controller.as_mut(), options));
+    // The caller's progress listener goes with the driver onto the pool's thread.
+    let listener = crate::progress::listener();
+    let result = rayon::scope(|_| {
+        crate::progress::reporting_to(listener, || {
+            drive(out, &mut world, &mut recorder, controller.as_mut(), options)
+        })
+    });
     let wall_seconds = started.elapsed().as_secs_f64();
     let trace_digest = recorder.trace_digest();
     recorder.commit()?;

@@ -5,7 +5,7 @@ import os
 import shutil
 import tempfile
 from pathlib import Path
-from typing import Any, Dict, List, Mapping, Optional, Union
+from typing import Any, Callable, Dict, List, Mapping, Optional, Tuple, Union
 
 import pandas as pd
 
@@ -48,6 +48,50 @@ def _source(scenario: Scenario, base_dir: Optional[Union[str, "os.PathLike[str]"
     raise TypeError(f"a scenario is a path or a dict, not {type(scenario).__name__}")
 
 
+# `progress=`: None or False (nothing), True (tqdm bars), or a callable
+# `progress(position, total, unit)`.
+Progress = Union[bool, Callable[[int, int, str], Any], None]
+
+
+class _Bars:
+    """tqdm bars (`tqdm.auto`: a widget in a notebook, text on a terminal) for the
+    crate's progress, one per unit it reports (`steps`, `windows`, `points`)."""
+
+    def __init__(self):
+        try:
+            from tqdm.auto import tqdm
+        except ImportError as e:
+            raise ImportError("progress=True draws tqdm bars: `pip install tqdm` "
+                              "(or pass a callable progress(position, total, unit))") from e
+        self._tqdm = tqdm
+        self._bars: Dict[str, Any] = {}
+
+    def __call__(self, position: int, total: int, unit: str) -> None:
+        bar = self._bars.get(unit)
+        if bar is None:
+            bar = self._bars[unit] = self._tqdm(total=total, unit=f" {unit}", leave=True)
+        if bar.total != total:
+            bar.total = total
+        bar.update(position - bar.n)
+
+    def close(self) -> None:
+        for bar in self._bars.values():
+            bar.close()
+
+
+def _reporter(progress: Progress) -> Tuple[Optional[Callable[[int, int, str], Any]], Callable[[], None]]:
+    """The callable the native module calls with positions, and what closes it."""
+    if progress is None or progress is False:
+        return None, lambda: None
+    if progress is True:
+        bars = _Bars()
+        return bars, bars.close
+    if callable(progress):
+        return progress, lambda: None
+    raise TypeError("progress is True, False, None or a callable "
+                    f"progress(position, total, unit), not {type(progress).__name__}")
+
+
 def read_table(path: Union[str, "os.PathLike[str]"]) -> pd.DataFrame:
     """One of a run's CSV files as a DataFrame: numbers as float64 or int64 columns
     (an empty cell, a value the run did not produce, is NaN), text as object."""
@@ -81,7 +125,8 @@ class Run:
 
 def run(scenario: Scenario, out: Optional[Union[str, "os.PathLike[str]"]] = None, *,
         set: Optional[Mapping[str, Any]] = None, force: bool = False,
-        base_dir: Optional[Union[str, "os.PathLike[str]"]] = None, **overrides: Any) -> Run:
+        base_dir: Optional[Union[str, "os.PathLike[str]"]] = None,
+        progress: Progress = None, **overrides: Any) -> Run:
     """Runs `scenario` (a scenario file's path, or a scenario as a dict) and returns its
     `Run`.
 
@@ -93,17 +138,23 @@ def run(scenario: Scenario, out: Optional[Union[str, "os.PathLike[str]"]] = None
     `force` replaces another scenario's run in `out`. `base_dir`: where a dict
     scenario's relative paths (FMUs) are read from, default the working directory.
 
+    `progress=True` shows a tqdm bar (a widget in a notebook) over the steps, or the
+    windows under a controller; a callable `progress(position, total, unit)` is called
+    instead (every 1024 steps, every window).
+
     Raises `DsmcosimError` for bad input (naming the field) and for a run that diverged
     (its outputs up to the divergence are in `out`). The GIL is released while it runs.
     """
     sets = _sets(overrides, set)
     source = _source(scenario, base_dir)
+    report, close = _reporter(progress)
     keep = out is not None
     directory = Path(out) if keep else Path(tempfile.mkdtemp(prefix="dsmcosim-run-"))
     try:
-        _native.run(source, os.fspath(directory), sets, force)
+        _native.run(source, os.fspath(directory), sets, force, report)
         return Run(directory, keep)
     finally:
+        close()
         if not keep:
             shutil.rmtree(directory, ignore_errors=True)
 
@@ -119,16 +170,49 @@ def validate(scenario: Scenario, *, set: Optional[Mapping[str, Any]] = None,
     return json.loads(_native.validate(_source(scenario, base_dir), sets))
 
 
-def sweep(sweep_file: Union[str, "os.PathLike[str]"], out: Union[str, "os.PathLike[str]"], *,
-          keep: str = "all", resume: bool = False, set: Optional[Mapping[str, Any]] = None,
-          **overrides: Any) -> pd.DataFrame:
-    """Runs the sweep file `sweep_file` into `out` (as `dsmcosim sweep`) and returns its
-    table, `out/sweep.csv`, as a DataFrame (one row per point). `keep`: what each
+def sweep(sweep_file: Union[str, "os.PathLike[str]", Mapping[str, Any]],
+          out: Union[str, "os.PathLike[str]"], *, keep: str = "all", resume: bool = False,
+          set: Optional[Mapping[str, Any]] = None,
+          base_dir: Optional[Union[str, "os.PathLike[str]"]] = None,
+          progress: Progress = None, **overrides: Any) -> pd.DataFrame:
+    """Runs a sweep into `out` (as `dsmcosim sweep`) and returns its table,
+    `out/sweep.csv`, as a DataFrame (one row per point).
+
+    `sweep_file`: a sweep file's path, or a sweep as a dict (its `base` scenario path
+    read relative to `base_dir`, default the working directory). `keep`: what each
     point keeps of its run (`"summary"`, `"trace"` or `"all"`); `resume` continues a
-    sweep in `out`. Overrides change the base scenario, as `--set` does."""
+    sweep in `out`. Overrides change the base scenario, as `--set` does.
+    `progress=True` shows a tqdm bar over the points (or pass a callable
+    `progress(position, total, unit)`)."""
     sets = _sets(overrides, set)
-    _native.sweep(path=os.fspath(sweep_file), out=os.fspath(out), sets=sets, keep=keep,
-                  resume=resume)
+    report, close = _reporter(progress)
+    scratch = None
+    try:
+        if isinstance(sweep_file, Mapping):
+            spec = dict(sweep_file)
+            base = spec.get("base")
+            if not isinstance(base, str):
+                raise TypeError("a sweep given as a dict names its `base` scenario by "
+                                "path (a string)")
+            root = Path(os.fspath(base_dir)) if base_dir is not None else Path.cwd()
+            spec["base"] = os.fspath((root / base).resolve())
+            scratch = tempfile.mkdtemp(prefix="dsmcosim-sweep-")
+            path = os.path.join(scratch, "sweep.json")
+            with open(path, "w") as f:
+                json.dump(spec, f)
+        elif isinstance(sweep_file, (str, os.PathLike)):
+            if base_dir is not None:
+                raise ValueError("base_dir is for a sweep given as a dict; a file's "
+                                 "`base` is read from its own directory")
+            path = os.fspath(sweep_file)
+        else:
+            raise TypeError(f"a sweep is a path or a dict, not {type(sweep_file).__name__}")
+        _native.sweep(path=path, out=os.fspath(out), sets=sets, keep=keep, resume=resume,
+                      progress=report)
+    finally:
+        close()
+        if scratch is not None:
+            shutil.rmtree(scratch, ignore_errors=True)
     return read_table(Path(out) / "sweep.csv")
 
 
@@ -147,12 +231,13 @@ class CoSim:
             sim.advance(sim.now + 1.0)
         sim.digest
 
-    The scenario must have no `controller` (Python is the controller); its channels'
+    The scenario must have no `controller` and no `schedule` (Python is the
+    controller; `schedule()` writes its decisions down as one); its channels'
     `tau` are the periods it starts at, and `measurement.period` sets the windows whose
-    cost `window_cost()` gives. Same scenario and same decisions give the same digest,
-    the command line's for the same scenario when the periods are never changed (or set
-    once at t = 0 to the values the file would hold). The GIL is released while it
-    advances.
+    cost `window_cost()` gives. Same scenario and same decisions give the same digest:
+    the command line's for the scenario with `schedule()` as its `schedule` when the
+    decisions are made at window boundaries (the command line's for the scenario itself
+    when the periods are never changed). The GIL is released while it advances.
     """
 
     def __init__(self, scenario: Scenario, *, set: Optional[Mapping[str, Any]] = None,
@@ -213,6 +298,14 @@ class CoSim:
     def set_periods(self, periods: List[float]) -> List[float]:
         """Sets every channel's period [s] from now on; returns the achieved ones."""
         return self._sim.set_periods([float(p) for p in periods])
+
+    def schedule(self) -> List[Dict[str, Any]]:
+        """The decisions made by `set_periods`, as a scenario's `schedule` section
+        (`[{"at": t, "tau": [...]}, ...]`): the scenario with it, run through the
+        command line, gives this co-simulation's digest. Raises `DsmcosimError` naming
+        a decision a schedule cannot hold (off a window boundary, or a second one at
+        the same time). A resumed CoSim holds the decisions made since it resumed."""
+        return [{"at": at, "tau": list(tau)} for at, tau in self._sim.schedule()]
 
     def window_cost(self) -> Optional[tuple]:
         """`(t_end, cost)` of the last closed measurement window ([s], [m]), or None."""

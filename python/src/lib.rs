@@ -6,9 +6,11 @@
 //! the command line would print and return.
 
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
 
 use dsmcosim::cosim::CoSim;
 use dsmcosim::kernel::SimTime;
+use dsmcosim::progress::{reporting_to, Listener};
 use dsmcosim::run::plan::RunPlan;
 use dsmcosim::run::RunOptions;
 use dsmcosim::scenario::{overrides, Scenario};
@@ -71,27 +73,74 @@ fn load(source: &Source, sets: &[String]) -> dsmcosim::Result<(Scenario, String)
     }
 }
 
+/// A Python callable `progress(position, total, unit)` as the crate's progress
+/// listener, with the first exception it raised kept to be raised once the work is done
+/// (the crate's loop cannot stop on it; later calls are skipped).
+struct Reporter {
+    listener: Option<Listener>,
+    failed: Arc<Mutex<Option<PyErr>>>,
+}
+
+impl Reporter {
+    fn new(progress: Option<Py<PyAny>>) -> Reporter {
+        let failed: Arc<Mutex<Option<PyErr>>> = Arc::default();
+        let listener = progress.map(|callable| {
+            let failed = failed.clone();
+            let listener: Listener = Arc::new(move |pos: u64, total: u64, unit: &str| {
+                let mut first = failed.lock().unwrap_or_else(|p| p.into_inner());
+                if first.is_some() {
+                    return;
+                }
+                Python::attach(|py| {
+                    if let Err(e) = callable.call1(py, (pos, total, unit)) {
+                        *first = Some(e);
+                    }
+                });
+            });
+            listener
+        });
+        Reporter { listener, failed }
+    }
+
+    /// `result`, or the callable's exception if it raised one.
+    fn finish<T>(self, py: Python<'_>, result: dsmcosim::Result<T>) -> PyResult<T> {
+        let value = result.map_err(|e| py_error(py, e))?;
+        let raised = self.failed.lock().unwrap_or_else(|p| p.into_inner()).take();
+        match raised {
+            Some(e) => Err(e),
+            None => Ok(value),
+        }
+    }
+}
+
 /// Runs a scenario into `out` (as `dsmcosim run`, writing the same files, the scenario
 /// as run included) and returns the run's digest. A run that diverged raises, its
-/// outputs up to the divergence written.
+/// outputs up to the divergence written. `progress(position, total, unit)` is called
+/// as the run goes (steps, or windows under a controller).
 #[pyfunction]
+#[pyo3(signature = (source, out, sets, force, progress=None))]
 fn run(
     py: Python<'_>,
     source: Source,
     out: PathBuf,
     sets: Vec<String>,
     force: bool,
+    progress: Option<Py<PyAny>>,
 ) -> PyResult<String> {
-    let result = py.detach(|| -> dsmcosim::Result<String> {
-        let (scenario, text) = load(&source, &sets)?;
-        let options = RunOptions {
-            force,
-            ..RunOptions::default()
-        };
-        dsmcosim::run::run_keeping_scenario(&scenario, &text, &out, options)
-            .map(|outcome| outcome.digest)
+    let reporter = Reporter::new(progress);
+    let listener = reporter.listener.clone();
+    let result = py.detach(|| {
+        reporting_to(listener, || -> dsmcosim::Result<String> {
+            let (scenario, text) = load(&source, &sets)?;
+            let options = RunOptions {
+                force,
+                ..RunOptions::default()
+            };
+            dsmcosim::run::run_keeping_scenario(&scenario, &text, &out, options)
+                .map(|outcome| outcome.digest)
+        })
     });
-    result.map_err(|e| py_error(py, e))
+    reporter.finish(py, result)
 }
 
 /// The plan of a scenario (what `dsmcosim validate --json` writes), as JSON text,
@@ -108,9 +157,9 @@ fn validate(py: Python<'_>, source: Source, sets: Vec<String>) -> PyResult<Strin
 }
 
 /// Runs the sweep file at `path` into `out` (as `dsmcosim sweep`); its table is
-/// `out/sweep.csv`.
+/// `out/sweep.csv`. `progress(position, total, "points")` is called as points finish.
 #[pyfunction]
-#[pyo3(signature = (path, out, sets, keep, resume))]
+#[pyo3(signature = (path, out, sets, keep, resume, progress=None))]
 fn sweep(
     py: Python<'_>,
     path: PathBuf,
@@ -118,6 +167,7 @@ fn sweep(
     sets: Vec<String>,
     keep: &str,
     resume: bool,
+    progress: Option<Py<PyAny>>,
 ) -> PyResult<()> {
     let keep = match keep {
         "summary" => dsmcosim::sweep::Keep::Summary,
@@ -139,8 +189,14 @@ fn sweep(
         shard: None,
         sets,
     };
-    let result = py.detach(|| dsmcosim::sweep::run(&path, &out, &options).map(|_| ()));
-    result.map_err(|e| py_error(py, e))
+    let reporter = Reporter::new(progress);
+    let listener = reporter.listener.clone();
+    let result = py.detach(|| {
+        reporting_to(listener, || {
+            dsmcosim::sweep::run(&path, &out, &options).map(|_| ())
+        })
+    });
+    reporter.finish(py, result)
 }
 
 /// A co-simulation steered from Python window by window: the same world the command
@@ -150,6 +206,8 @@ fn sweep(
 struct PyCoSim {
     world: CoSim,
     recorder: Recorder,
+    /// Every `set_periods` call: when, and the periods asked [s].
+    decisions: Vec<(SimTime, Vec<f64>)>,
 }
 
 /// Simulated time [s] as the kernel's nanoseconds, or an error naming `what`.
@@ -168,12 +226,19 @@ impl PyCoSim {
                  (its channels' tau are the periods it starts at)",
             ));
         }
+        if !scenario.schedule.is_empty() {
+            return Err(dsmcosim::Error::invalid(
+                "schedule",
+                "a CoSim is steered from Python: give a scenario without a schedule                  (set_periods makes those decisions; CoSim.schedule() writes them down)",
+            ));
+        }
         dsmcosim::run::preflight(scenario, &RunOptions::default())?;
         let recorder = Recorder::for_scenario(None, scenario)
             .map_err(|e| dsmcosim::Error::io(Path::new("<recorder>"), e))?;
         Ok(PyCoSim {
             world: CoSim::new(scenario),
             recorder,
+            decisions: Vec::new(),
         })
     }
 
@@ -186,6 +251,7 @@ impl PyCoSim {
         Ok(PyCoSim {
             world: self.world.clone(),
             recorder,
+            decisions: self.decisions.clone(),
         })
     }
 }
@@ -220,6 +286,7 @@ impl PyCoSim {
         Ok(PyCoSim {
             world: cp.world,
             recorder: cp.recorder,
+            decisions: Vec::new(),
         })
     }
 
@@ -335,7 +402,41 @@ impl PyCoSim {
                 ),
             )
         })?;
+        self.decisions.push((now, periods));
         Ok(set.iter().map(|t| t.as_secs_f64()).collect())
+    }
+
+    /// The decisions made so far by `set_periods` as a scenario's `schedule` section:
+    /// `[(at [s], [period per channel [s]]), ...]`. The scenario with it gives this
+    /// run's digest through the command line. Raises for a decision a schedule cannot
+    /// hold: one off a measurement window boundary, or a second at the same time.
+    fn schedule(&self, py: Python<'_>) -> PyResult<Vec<(f64, Vec<f64>)>> {
+        let period = self.world.scenario().measurement_period;
+        let mut out: Vec<(f64, Vec<f64>)> = Vec::new();
+        for (i, (at, tau)) in self.decisions.iter().enumerate() {
+            let why = if at.0 % period.0 != 0 {
+                Some(format!(
+                    "was made at {} s, off the measurement window boundaries (multiples of                      {} s) where a schedule changes periods",
+                    at.as_secs_f64(),
+                    period.as_secs_f64()
+                ))
+            } else if i > 0 && self.decisions[i - 1].0 == *at {
+                Some(format!(
+                    "is a second decision at {} s; a schedule holds one per boundary",
+                    at.as_secs_f64()
+                ))
+            } else {
+                None
+            };
+            if let Some(why) = why {
+                return Err(py_error(
+                    py,
+                    dsmcosim::Error::invalid(format!("decisions[{i}]"), why),
+                ));
+            }
+            out.push((at.as_secs_f64(), tau.clone()));
+        }
+        Ok(out)
     }
 
     /// The last closed measurement window: `(t_end [s], cost [m])`, or None before the

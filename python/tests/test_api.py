@@ -235,3 +235,77 @@ def test_steering_errors_name_what_is_wrong():
     with pytest.raises(dsmcosim.DsmcosimError) as e:
         dsmcosim.CoSim(SCENARIOS / "grid16_space_cp.json")
     assert e.value.field == "controller"
+
+
+def test_a_mid_run_schedule_replays_through_the_cli(tmp_path):
+    """The issue's "same decisions => same digest as the equivalent fixed schedule run
+    through the command line", with decisions made mid-run: the scenario with
+    `CoSim.schedule()` as its `schedule` gives the steered run's digest."""
+    sim = dsmcosim.CoSim(FIXED, duration=4.0)
+    for periods in [[0.005, 0.005], [0.003, 0.008], [0.0045, 0.0055], [0.009, 0.002]]:
+        sim.set_periods(periods)
+        sim.advance(sim.now + 1.0)
+    schedule = sim.schedule()
+    assert [e["at"] for e in schedule] == [0.0, 1.0, 2.0, 3.0]
+    doc = json.loads(FIXED.read_text())
+    doc["duration"] = 4.0
+    doc["schedule"] = schedule
+    scenario = tmp_path / "scheduled.json"
+    scenario.write_text(json.dumps(doc))
+    cli = cli_run(scenario, tmp_path / "cli")
+    assert sim.digest == cli["digest"]
+    epochs = pd.read_csv(tmp_path / "cli" / "epochs.csv")
+    assert list(epochs["tau_tau1_requested"]) == [0.005, 0.003, 0.0045, 0.009]
+    # Without the schedule the command line's run is another.
+    assert cli_run(FIXED, tmp_path / "plain", "/duration=4.0")["digest"] != sim.digest
+
+
+def test_a_schedule_refuses_decisions_it_cannot_hold():
+    sim = dsmcosim.CoSim(FIXED, duration=2.0)
+    sim.advance(0.5)
+    sim.set_periods([0.004, 0.006])
+    with pytest.raises(dsmcosim.DsmcosimError) as e:
+        sim.schedule()
+    assert e.value.field == "decisions[0]" and "window boundaries" in e.value.message
+    doc = json.loads(FIXED.read_text())
+    doc["schedule"] = [{"at": 0, "tau": [0.004, 0.006]}]
+    with pytest.raises(dsmcosim.DsmcosimError) as e:
+        dsmcosim.CoSim(doc)
+    assert e.value.field == "schedule"
+
+
+def test_progress_reports_every_step_slice_and_every_sweep_point(tmp_path):
+    seen = []
+    dsmcosim.run(FIXED, duration=2.0, progress=lambda pos, total, unit: seen.append((pos, total, unit)))
+    assert seen and all(unit == "steps" and total == 2000 for _, total, unit in seen)
+    positions = [pos for pos, _, _ in seen]
+    assert positions == sorted(positions) and positions[-1] == 2000
+
+    windows = []
+    dsmcosim.run(SCENARIOS / "grid16_space_cp.json", duration=3.0,
+                 set={"/controller/surface_window": 1.0, "/controller/landscape": False,
+                      "/controller/baselines": []},
+                 progress=lambda pos, total, unit: windows.append((pos, total, unit)))
+    assert windows[-1] == (3, 3, "windows")
+
+    points = []
+    sweep = {"name": "tiny", "base": "grid16_space_fixed.json",
+             "overrides": {"/duration": 1.0},
+             "axes": [{"name": "tau1", "pointer": "/channels/0/tau", "values": [0.002, 0.005]}]}
+    table = dsmcosim.sweep(sweep, tmp_path / "out", keep="summary", base_dir=SCENARIOS,
+                           progress=lambda pos, total, unit: points.append((pos, total, unit)))
+    assert list(table["tau1"]) == [0.002, 0.005]
+    assert points[-1] == (2, 2, "points")
+
+
+def test_progress_true_draws_tqdm_bars_and_a_raising_callback_raises(capsys):
+    pytest.importorskip("tqdm")
+    ran = dsmcosim.run(FIXED, duration=2.0, progress=True)
+    assert ran.summary["steps"] == 2000
+    assert "2000/2000" in capsys.readouterr().err
+
+    def broken(pos, total, unit):
+        raise RuntimeError("bar broke")
+
+    with pytest.raises(RuntimeError, match="bar broke"):
+        dsmcosim.run(FIXED, duration=1.0, progress=broken)

@@ -525,6 +525,27 @@ impl CoSim {
         Ok(achieved.to_vec())
     }
 
+    /// The `schedule` entry at `t`, if there is one, put in force as a controller's
+    /// decision at `t` (the requested periods; an ideal channel runs each to the
+    /// nanosecond, at least one step).
+    fn apply_schedule(&mut self, t: SimTime) -> Result<()> {
+        let Ok(i) = self.scenario.schedule.binary_search_by_key(&t, |e| e.at) else {
+            return Ok(());
+        };
+        let requested = self.scenario.schedule[i].tau.clone();
+        let dt = self.scenario.dt;
+        let achieved: Vec<SimTime> = requested
+            .iter()
+            .map(|&r| crate::network::channel::achieved_period(r, dt))
+            .collect();
+        self.set_taus(t, &requested, &achieved)
+            .map(|_| ())
+            .map_err(|e| Error::Numerical {
+                time: t,
+                message: format!("schedule[{i}]: the TDMA cycle cannot serve its periods: {e}"),
+            })
+    }
+
     /// Processes every event before `t`, and the measurement events at `t` (so the
     /// window ending at `t` is closed and a controller can decide at `t`).
     pub fn advance_to(&mut self, t: SimTime, obs: &mut dyn Observer) -> Result<()> {
@@ -578,6 +599,11 @@ impl CoSim {
                 unit.start(spec)?;
             }
         }
+        if self.events == 0 {
+            // A schedule entry at 0 goes into force before anything happens, as a
+            // decision made at 0 (`advance_to(0)` processes nothing but windows).
+            self.apply_schedule(SimTime::ZERO)?;
+        }
         if class == EventClass::PartitionStep {
             if let Some(ts) = self.next_step.take() {
                 self.events += 1;
@@ -620,7 +646,10 @@ impl CoSim {
                 if let Some(e) = self.epochs.last() {
                     obs.on_epoch(e);
                 }
-                Ok(())
+                // The window boundary is where a controller (or a Python script, after
+                // `advance_to(t)`) decides: a scheduled change goes into force here, so
+                // a schedule replays such decisions bit for bit.
+                self.apply_schedule(t)
             }
             Event::Cycle => self.cycle(t, obs),
             Event::Frame {

@@ -146,6 +146,11 @@ pub struct ScenarioFile {
         skip_serializing_if = "Option::is_none"
     )]
     pub controller: Option<ControllerFile>,
+    /// A fixed schedule of channel periods, changed at window boundaries (what a
+    /// controller would decide, written down: a Python-steered run's decisions replay
+    /// here); default none. Not with a `controller`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub schedule: Vec<ScheduleEntryFile>,
     /// FMI 2.0 co-simulation FMUs run as parts of the scene, each on a node; default none.
     #[serde(default)]
     pub fmus: Vec<FmuFile>,
@@ -1035,6 +1040,20 @@ pub const DEFAULT_CHANNEL_K: f64 = 1.0;
 
 fn default_channel_k() -> f64 {
     DEFAULT_CHANNEL_K
+}
+
+/// One entry of `schedule`: from `at` on, the channels run at `tau`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ScheduleEntryFile {
+    /// When the periods change [s]: a measurement window boundary (a whole multiple of
+    /// `measurement.period`, 0 included) before `duration`, later than the entry
+    /// before; required.
+    pub at: f64,
+    /// The period asked of each channel [s], one per entry of `channels` in their order,
+    /// each > 0; required. An ideal channel runs it to the nanosecond (at least one
+    /// step); a TDMA network what the slot list it schedules from them serves.
+    pub tau: Vec<f64>,
 }
 
 /// One entry of `channels`: a periodic channel (method §4).

@@ -725,6 +725,9 @@ pub struct Scenario {
     pub channels: Vec<ChannelSpec>,
     /// Delay controller; `None` = channels keep their scenario periods.
     pub controller: Option<ControllerSpec>,
+    /// `schedule`: the periods the channels change to, at window boundaries, in time
+    /// order; empty = none.
+    pub schedule: Vec<ScheduledPeriods>,
     /// FMUs run as parts of the scene (docs/fmi.md).
     pub fmus: Vec<FmuSpec>,
     /// FMU output → FMU input connections, each on a channel.
@@ -746,6 +749,15 @@ impl Scenario {
     pub fn node_of_body(&self, b: usize) -> usize {
         self.partition.as_ref().map_or(0, |p| p.node_of[b])
     }
+}
+
+/// One validated `schedule` entry: from `at` on, the channels are asked for `tau` [s].
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ScheduledPeriods {
+    /// A window boundary before the scenario's end.
+    pub at: SimTime,
+    /// The requested period per channel [s].
+    pub tau: Vec<f64>,
 }
 
 /// The highest node number an FMU may run on (1-based): each node is a place in the

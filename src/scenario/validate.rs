@@ -26,6 +26,7 @@ mod fmus;
 mod joints;
 mod network;
 mod partition;
+mod schedule;
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -376,6 +377,12 @@ pub fn validate(file: ScenarioFile) -> Result<Scenario> {
         )?),
         None => None,
     };
+    let schedule = schedule::schedule(
+        &file.schedule,
+        &channels,
+        controller.is_some(),
+        (measurement_period, duration),
+    )?;
 
     let scenario = Scenario {
         name: file.name,
@@ -398,6 +405,7 @@ pub fn validate(file: ScenarioFile) -> Result<Scenario> {
         network,
         channels,
         controller,
+        schedule,
         fmus,
         connections,
         cost_signals,

@@ -11,6 +11,12 @@ use serde_json::{json, Value};
 /// The thesis scene on 4 nodes, space distribution, sample-and-hold channels with the
 /// `reset` coupling (the reading the thesis claims below were measured in).
 fn scene(duration: f64, controller: Option<Value>) -> Scenario {
+    let v = scene_json(duration, controller);
+    parse_str(&v.to_string(), "<test>").unwrap_or_else(|e| panic!("scenario: {e}"))
+}
+
+/// [`scene`] as JSON.
+fn scene_json(duration: f64, controller: Option<Value>) -> Value {
     let mut v = json!({
         "name": "ctl", "seed": 7, "duration": duration, "dt": 0.001,
         "model": {"grid": {"rows": 4, "cols": 4, "spacing": 1.8, "mass": 1.0, "size": 0.2}},
@@ -24,7 +30,7 @@ fn scene(duration: f64, controller: Option<Value>) -> Scenario {
     if let Some(c) = controller {
         v["controller"] = c;
     }
-    parse_str(&v.to_string(), "<test>").unwrap_or_else(|e| panic!("scenario: {e}"))
+    v
 }
 
 /// The run's digest (everything recorded), its dynamics digest (steps only) and what it
@@ -63,6 +69,49 @@ fn baseline_forks_never_change_the_live_run() {
     assert_ne!(a, b, "the baselines' measurements are recorded values");
     assert_eq!(exp.windows.len(), 3);
     assert!(exp.windows.iter().all(|w| w.baselines.len() == 3));
+}
+
+/// A DSM run's decisions, written down as a `schedule` (each window's requested
+/// periods, as epochs.csv holds them), replay its live dynamics bit for bit: the
+/// scheduled scene's `dynamics_digest` is the controlled run's. A schedule that moves
+/// one decision by a millisecond is another run.
+#[test]
+fn a_schedule_of_the_dsm_s_decisions_replays_its_dynamics() {
+    let with = |key: &str, value: Value| {
+        let mut v = scene_json(4.0, None);
+        v["measurement"] = json!({"period": 0.5});
+        v[key] = value;
+        parse_str(&v.to_string(), "<test>").unwrap_or_else(|e| panic!("scenario: {e}"))
+    };
+    let controlled = with(
+        "controller",
+        json!({"method": "dsm", "problem": "cp", "budget": 400.0, "tau_max": 0.03,
+               "initial": [0.005], "dsm": {"size": 0.002}}),
+    );
+    let ids: Vec<u32> = controlled.bodies.iter().map(|b| b.id).collect();
+    let links = controlled.links.len();
+    let mut rec = Recorder::new(None, 1, links, &ids, &[], &[]).expect("recorder");
+    let mut world = CoSim::new(&controlled);
+    let mut exp = Experiment::default();
+    experiment::run(&mut world, &mut rec, &mut exp).unwrap_or_else(|e| panic!("run: {e}"));
+    let decisions: Vec<Value> = world
+        .epochs()
+        .iter()
+        .map(|e| {
+            let tau: Vec<f64> = e.taus.iter().map(|t| t.0).collect();
+            json!({"at": e.t_start.as_secs_f64(), "tau": tau})
+        })
+        .collect();
+    assert_eq!(decisions.len(), 8);
+    let distinct: std::collections::BTreeSet<String> =
+        decisions.iter().map(|d| d["tau"].to_string()).collect();
+    assert!(distinct.len() > 1, "the DSM moved: {decisions:?}");
+    let replay = |decisions: &[Value]| run_digests(&with("schedule", json!(decisions))).1;
+    assert_eq!(replay(&decisions), rec.dynamics_digest());
+    let mut moved = decisions.clone();
+    let tau = moved[5]["tau"][0].as_f64().unwrap();
+    moved[5]["tau"][0] = json!(tau + 0.001);
+    assert_ne!(replay(&moved), rec.dynamics_digest());
 }
 
 #[test]

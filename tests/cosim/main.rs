@@ -429,3 +429,47 @@ fn integrated_ghosts_hold_the_thesis_scene_better_than_held_ones() {
     assert!(wh.max_violation() > wi.max_violation());
     assert!(wh.mean_cost() > wi.mean_cost());
 }
+
+/// A `schedule` replays decisions: the scene with periods changed at window boundaries
+/// by its `schedule` runs bit for bit as the scene without one, steered by hand with
+/// `set_taus` after `advance_to` each boundary (what a controller or a Python script
+/// does), and unlike the scene left at its first periods.
+#[test]
+fn a_schedule_replays_decisions_made_at_window_boundaries() {
+    let steps: [(u64, [f64; 2]); 3] = [
+        (0, [0.004, 0.009]),
+        (1_000_000_000, [0.002, 0.011]),
+        (2_000_000_000, [0.0075, 0.003]),
+    ];
+    let mut v = space(3.0, 0.003, 0.007, None);
+    v["schedule"] = json!(steps
+        .iter()
+        .map(|(at, tau)| json!({"at": *at as f64 / 1e9, "tau": tau}))
+        .collect::<Vec<_>>());
+    let (scheduled, by_schedule) = run(&v);
+
+    let s = scenario(&space(3.0, 0.003, 0.007, None));
+    let mut world = CoSim::new(&s);
+    let mut by_hand = Keep::default();
+    for (at, tau) in steps {
+        world.advance_to(SimTime(at), &mut by_hand).unwrap();
+        assert_eq!(
+            world.now(),
+            SimTime(at),
+            "decisions are taken at the boundary"
+        );
+        let achieved: Vec<SimTime> = tau
+            .iter()
+            .map(|&t| dsmcosim::network::channel::achieved_period(t, s.dt))
+            .collect();
+        world.set_taus(SimTime(at), &tau, &achieved).unwrap();
+    }
+    world.run_to_end(&mut by_hand).unwrap();
+    assert_eq!(by_schedule.digest.hex(), by_hand.digest.hex());
+    assert_eq!(scheduled.messages(), world.messages());
+    let last: Vec<f64> = scheduled.epochs()[2].taus.iter().map(|t| t.0).collect();
+    assert_eq!(last, vec![0.0075, 0.003], "the last window's requests");
+
+    let (_, unscheduled) = run(&space(3.0, 0.003, 0.007, None));
+    assert_ne!(by_schedule.digest.hex(), unscheduled.digest.hex());
+}

@@ -321,6 +321,35 @@ fn non_finite_values_built_in_code_are_rejected() {
     invalid_file(f, "stabilizer.epsilon", "inf");
 }
 
+/// `part_base()` in 0.25-s windows with `schedule` set to `entries`.
+fn scheduled(entries: Value) -> String {
+    let mut doc = part_base();
+    doc["measurement"] = json!({"period": 0.25});
+    doc["schedule"] = entries;
+    doc.to_string()
+}
+
+#[test]
+#[rustfmt::skip]
+fn a_schedule_sits_on_window_boundaries_with_a_period_per_channel() {
+    let ok = |e: Value| parse_str(&scheduled(e), "case.json").unwrap_or_else(|e| panic!("{e}"));
+    let s = ok(json!([{"at": 0, "tau": [0.004, 0.02]}, {"at": 0.5, "tau": [0.006, 0.01]}]));
+    assert_eq!(s.schedule.len(), 2);
+    assert_eq!(s.schedule[1].at.as_nanos(), 500_000_000);
+    assert_eq!(s.schedule[1].tau, vec![0.006, 0.01]);
+    invalid(scheduled(json!([{"at": 0.3, "tau": [0.004, 0.02]}])), "schedule[0].at", "window boundary");
+    invalid(scheduled(json!([{"at": 1.0, "tau": [0.004, 0.02]}])), "schedule[0].at", "before duration");
+    invalid(scheduled(json!([{"at": -0.25, "tau": [0.004, 0.02]}])), "schedule[0].at", "≥ 0");
+    invalid(scheduled(json!([{"at": 0.5, "tau": [0.004, 0.02]}, {"at": 0.25, "tau": [0.004, 0.02]}])), "schedule[1].at", "later than schedule[0].at");
+    invalid(scheduled(json!([{"at": 0.25, "tau": [0.004]}])), "schedule[0].tau", "one period per channel, 2 (got 1)");
+    invalid(scheduled(json!([{"at": 0.25, "tau": [0.004, 0]}])), "schedule[0].tau[1]", "> 0");
+    invalid(scheduled(json!([{"at": 0.25, "tau": [0.004, 0.01], "why": 1}])), "schedule[0].why", "unknown field");
+    let mut doc: Value = serde_json::from_str(&scheduled(json!([{"at": 0.25, "tau": [0.004, 0.01]}]))).unwrap();
+    doc["controller"] = json!({"problem": "cp", "budget": 400, "tau_max": 0.05});
+    invalid(doc.to_string(), "schedule", "beside a `controller`");
+    invalid(set("/schedule", json!([{"at": 0, "tau": [0.004]}])), "schedule", "needs `channels`");
+}
+
 #[test]
 #[rustfmt::skip]
 fn unknown_keys_are_rejected() {
@@ -1021,6 +1050,7 @@ fn scenario() -> impl Strategy<Value = ScenarioFile> {
                 channels,
                 fmus: Vec::new(),
                 connections: Vec::new(),
+                schedule: Vec::new(),
                 base_dir: None,
             }
         },

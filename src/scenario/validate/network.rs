@@ -243,8 +243,9 @@ pub(in crate::scenario) fn tdma_error(e: TdmaError) -> Error {
 }
 
 /// The finished scenario's TDMA network builds: every frame fits its slot, the initial
-/// list (given or scheduled) fits the cycle, and a controller's every channel at
-/// `tau_min` can be scheduled (so no decision within the bounds is refused).
+/// list (given or scheduled) fits the cycle, every `schedule` entry can be scheduled,
+/// and a controller's every channel at `tau_min` can be scheduled (so no decision
+/// within the bounds is refused).
 pub(super) fn check_tdma(s: &Scenario) -> Result<()> {
     let NetworkSpec::Tdma(_) = &s.network else {
         return Ok(());
@@ -269,6 +270,14 @@ pub(super) fn check_tdma(s: &Scenario) -> Result<()> {
             other => other,
         }
     })?;
+    for (i, entry) in s.schedule.iter().enumerate() {
+        link.schedule_secs(&entry.tau).map_err(|e| {
+            Error::invalid(
+                format!("schedule[{i}].tau"),
+                format!("the TDMA cycle cannot serve these periods ({e})"),
+            )
+        })?;
+    }
     let Some(c) = &s.controller else {
         return Ok(());
     };
