@@ -110,7 +110,7 @@ fn read_bytes(path: &Path) -> Result<Vec<u8>> {
         && &bytes[..MAGIC.len()] == MAGIC
         && bytes[MAGIC.len()..] == VERSION.to_le_bytes()
     {
-        let cap = crate::run::budget::DEFAULT_MAX_MEMORY_BYTES;
+        let cap = crate::input::DEFAULT_MAX_MEMORY_BYTES;
         file.take(cap)
             .read_to_end(&mut bytes)
             .map_err(|e| Error::io(path, e))?;
@@ -122,7 +122,7 @@ fn read_bytes(path: &Path) -> Result<Vec<u8>> {
 ///
 /// The magic bytes and the version are read and checked first, so that a file that is no
 /// checkpoint (`/dev/zero`, any stream) is refused after 20 bytes instead of read whole;
-/// the rest is read up to [`crate::run::budget::DEFAULT_MAX_MEMORY_BYTES`].
+/// the rest is read up to [`crate::input::DEFAULT_MAX_MEMORY_BYTES`].
 pub fn read(path: &Path) -> Result<Checkpoint> {
     let bytes = read_bytes(path)?;
     let label = path.display().to_string();

@@ -26,10 +26,14 @@
 //! error, max |w|) done in node order after the parallel part.
 
 pub mod event;
+pub mod fit;
 pub mod fmus;
+mod partitions;
 pub mod tdma;
+pub mod unit;
 pub mod world;
 
 pub use event::Event;
 pub use tdma::TdmaLink;
+pub use unit::Unit;
 pub use world::{CoSim, EpochRecord, Observer, StepValues};

@@ -124,20 +124,6 @@ pub enum Place {
     Body(u32),
 }
 
-impl Place {
-    /// The constraint row `l` (0-based, in the scenario's order: links, then joints'
-    /// rows).
-    pub fn row(scenario: &crate::scenario::Scenario, l: usize) -> Place {
-        match scenario.links[l].joint {
-            Some((j, r)) => Place::JointRow {
-                joint: j as usize + 1,
-                row: r as usize,
-            },
-            None => Place::Link(l + 1),
-        }
-    }
-}
-
 impl std::fmt::Display for Place {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {

@@ -18,6 +18,11 @@ use crate::error::{Error, Result};
 /// body list of that size would take about 200 MB and is refused).
 pub const MAX_INPUT_BYTES: u64 = 64 << 20;
 
+/// Default bound on a run's estimated peak memory [bytes]: 16 GB (`--max-memory` lifts
+/// it; `run::budget` lowers it where the process may have less). A checkpoint, a run's
+/// state, is read up to it.
+pub const DEFAULT_MAX_MEMORY_BYTES: u64 = 16_000_000_000;
+
 /// The bytes of the file at `path`, at most `cap` of them: a longer file (or an endless
 /// stream) is refused after `cap + 1` bytes, naming the path and the cap.
 pub fn read_capped(path: &Path, cap: u64) -> Result<Vec<u8>> {

@@ -9,6 +9,7 @@
 
 pub mod dynamics;
 pub mod integrator;
+pub mod invariants;
 pub mod solver;
 pub mod state;
 pub mod system;

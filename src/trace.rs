@@ -6,12 +6,12 @@
 pub mod compare;
 pub mod digest;
 pub mod drift;
-pub mod invariants;
 pub mod network_log;
 pub mod plot_samples;
 pub mod recorder;
 
+/// The net's invariants, computed by the dynamics' layer ([`crate::multibody::invariants`]).
+pub use crate::multibody::invariants::{self, Invariants};
 pub use digest::Digest;
-pub use invariants::Invariants;
 pub use network_log::NetworkLog;
 pub use recorder::Recorder;

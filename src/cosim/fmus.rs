@@ -20,10 +20,13 @@
 
 use std::sync::{Arc, Mutex};
 
+use super::unit::{Sampled, Unit};
 use crate::error::{Error, Result};
 use crate::fmu::{Fmu, Instance};
 use crate::kernel::SimTime;
-use crate::scenario::model::{FmuSpec, FmuValueKind};
+use crate::network::route::Route;
+use crate::network::{Message, Payload};
+use crate::scenario::model::{FmuSpec, FmuValueKind, Scenario, SignalSink, SignalSource};
 
 /// One FMU's place in the world: its live instance (not in a fork until its first
 /// event) and what the co-simulation holds of it.
@@ -280,5 +283,37 @@ impl<'de> serde::Deserialize<'de> for FmuUnit {
             output_vrs: Vec::new(),
             input_vrs: Vec::new(),
         })
+    }
+}
+
+/// An FMU as a [`Unit`] of the world: it sends the outputs its connections name, takes
+/// the inputs they deliver (held to its next communication point), and computes in the
+/// second half of each lock-step, from one communication point to the next.
+impl Unit for FmuUnit {
+    fn sample(&mut self, _t: SimTime, route: &Route, scenario: &Scenario) -> Option<Sampled> {
+        let connection = route.body;
+        let SignalSource::Fmu { output, .. } = scenario.connections[connection].from else {
+            return None;
+        };
+        let value = self.output(output);
+        Some((Payload::Signal { connection, value }, None))
+    }
+
+    fn deliver(&mut self, msg: &Message, _state_time: SimTime, scenario: &Scenario) {
+        if let Payload::Signal { connection, value } = msg.payload {
+            if let SignalSink::Fmu { input, .. } = scenario.connections[connection].to {
+                self.set_input(input, value);
+            }
+        }
+    }
+
+    fn finish_step(
+        &mut self,
+        index: usize,
+        t: SimTime,
+        dt: SimTime,
+        scenario: &Scenario,
+    ) -> Result<()> {
+        self.step(&scenario.fmus[index], t, dt)
     }
 }

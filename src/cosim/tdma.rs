@@ -20,8 +20,7 @@ use crate::network::tdma::{
 };
 use crate::network::{Channel, Message};
 use crate::partition::line::LineSet;
-use crate::scenario::file::TdmaSample;
-use crate::scenario::model::{NetworkSpec, Scenario, TdmaSpec};
+use crate::scenario::model::{NetworkSpec, Scenario, TdmaSample, TdmaSpec};
 
 /// A co-simulation's TDMA network and what it has delivered.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]

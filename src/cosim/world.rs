@@ -6,13 +6,12 @@ use nalgebra::{Quaternion, Vector3};
 use rayon::prelude::*;
 
 use super::fmus::FmuUnit;
-use super::{Event, TdmaLink};
+use super::{Event, TdmaLink, Unit};
 use crate::control::CostMeter;
 use crate::error::{Divergence, Error, Place, Result};
 use crate::kernel::{EventClass, Kernel, SimTime};
-use crate::multibody::dynamics::EvalError;
-use crate::multibody::solver::BATCH;
-use crate::multibody::System;
+use crate::multibody::invariants::Invariants;
+use crate::network::route::Route;
 use crate::network::tdma::{tdma_node, CycleReport, TdmaError};
 use crate::network::{Channel, Message, Payload};
 use crate::partition::line::LineSet;
@@ -20,7 +19,6 @@ use crate::partition::{Layout, Node};
 use crate::scenario::model::{
     BodyModel, BodySpec, DataKind, NetworkSpec, Scenario, SignalSink, SignalSource,
 };
-use crate::trace::Invariants;
 
 /// The values of one step, as observers (trace recorder, digest) see them: the whole
 /// model, gathered from the nodes that own each link and body.
@@ -154,15 +152,13 @@ pub fn channels_of(scenario: &Scenario, layout: &Layout) -> Vec<Channel> {
         .map(|c| Channel::new(c, &layout.routes))
         .collect();
     for (i, c) in scenario.connections.iter().enumerate() {
-        channels[c.channel]
-            .routes
-            .push(crate::partition::layout::Route {
-                kind: DataKind::Signal,
-                from: c.from_node(scenario),
-                to: c.to_node(scenario),
-                body: i,
-                link: None,
-            });
+        channels[c.channel].routes.push(Route {
+            kind: DataKind::Signal,
+            from: c.from_node(scenario),
+            to: c.to_node(scenario),
+            body: i,
+            link: None,
+        });
     }
     channels
 }
@@ -623,22 +619,11 @@ impl CoSim {
             Event::Deliver(msg) => {
                 self.messages += 1;
                 obs.on_delivery(t, &msg);
-                if let Payload::Signal { connection, value } = msg.payload {
-                    match self.scenario.connections[connection].to {
-                        SignalSink::Fmu { fmu, input } => self.fmus[fmu].set_input(input, value),
-                        SignalSink::BodyForce { body, axis } => {
-                            self.nodes[msg.to].set_input_force(body, axis, value)
-                        }
-                    }
-                    return Ok(());
-                }
-                // The nodes' state is that of the next step's time.
+                // The units' state is that of the next step's time.
                 let state_time = SimTime(self.steps_done * self.scenario.dt.0);
-                let to = &mut self.nodes[msg.to];
-                if let Some(made) = msg.momentum {
-                    to.receive_momentum(msg.from, msg.sent, made);
-                }
-                to.apply(msg.from, msg.sent, state_time, &msg.payload);
+                let scenario = &*self.scenario;
+                receiver(&mut self.nodes, &mut self.fmus, scenario, &msg)
+                    .deliver(&msg, state_time, scenario);
                 Ok(())
             }
             Event::WindowEnd => {
@@ -764,51 +749,19 @@ impl CoSim {
         }
     }
 
-    /// The message of route `r` of channel `c`, sampled at `t`.
-    /// A line's end starts its next wave window with its sample.
+    /// The message of route `r` of channel `c`, sampled at `t` by the route's source.
     fn message(&mut self, t: SimTime, c: usize, r: usize) -> Option<Message> {
         let route = self.channels[c].routes[r];
-        if route.kind == DataKind::Signal {
-            let value = match self.scenario.connections[route.body].from {
-                SignalSource::Fmu { fmu, output } => self.fmus[fmu].output(output),
-                SignalSource::Body { body, quantity } => {
-                    self.nodes[route.from].body_value(body, quantity)
-                }
-            };
-            return Some(Message {
-                from: route.from,
-                to: route.to,
-                channel: c,
-                sent: t,
-                payload: Payload::Signal {
-                    connection: route.body,
-                    value,
-                },
-                momentum: None,
-            });
-        }
-        let from = &mut self.nodes[route.from];
-        let payload = match (route.kind, route.link) {
-            (DataKind::State, _) => {
-                let mut payload = from.state_payload(t, route.body, route.to);
-                if let Payload::State { lines, .. } = &mut payload {
-                    *lines = from.line_samples_to(t, route.body, route.to);
-                }
-                payload
-            }
-            (DataKind::Force, Some(l)) if from.line_index(l).is_some() => {
-                Payload::Line(from.line_sample(t, l)?)
-            }
-            (DataKind::Force, Some(l)) => from.force_payload(l, route.body),
-            (DataKind::Force, None) | (DataKind::Signal, _) => return None,
-        };
+        let scenario = &*self.scenario;
+        let unit = source(&mut self.nodes, &mut self.fmus, scenario, &route);
+        let (payload, momentum) = unit.sample(t, &route, scenario)?;
         Some(Message {
             from: route.from,
             to: route.to,
             channel: c,
             sent: t,
             payload,
-            momentum: from.momentum_made(t),
+            momentum,
         })
     }
 
@@ -820,17 +773,10 @@ impl CoSim {
         self.schedule(at, EventClass::Delivery, Event::Deliver(Box::new(msg)));
     }
 
-    /// A state message is sampled now: its receiver keeps its ghost's state of the
-    /// sample time.
+    /// `msg` is sampled now: its receiver keeps what it will compare it with (a
+    /// partition: its ghost's state of the sample time).
     fn snapshot(&mut self, msg: &Message) {
-        match msg.payload {
-            Payload::State { body, .. } => self.nodes[msg.to].snapshot_ghost(body, msg.sent),
-            Payload::Force { body, .. } => {
-                self.nodes[msg.to].snapshot_port(body, msg.from, msg.sent)
-            }
-            Payload::Line(sample) => self.nodes[msg.to].snapshot_line(sample.link, msg.sent),
-            Payload::Signal { .. } => {}
-        }
+        receiver(&mut self.nodes, &mut self.fmus, &self.scenario, msg).sampled(msg);
     }
 
     fn schedule(&mut self, t: SimTime, class: EventClass, event: Event) {
@@ -898,23 +844,12 @@ impl CoSim {
         let k = self.steps_done;
         let last = k == self.scenario.steps;
         let parallel = self.steps_in_parallel();
-        // The nodes share nothing during a step: their rate evaluations are batched
-        // (results and first error as if evaluated one after another in node order),
-        // on rayon when the step is large enough; each node's values are the same bits
-        // on any thread, and the first error is the lowest node's.
-        if parallel {
-            begin_parallel(&mut self.nodes, t)
-        } else if let [node] = &mut self.nodes[..] {
-            // Monolithic: no border to prepare, nothing to batch.
-            node.system.begin_step(t, &node.state).map_err(|e| (0, e))
-        } else {
-            for node in &mut self.nodes {
-                node.prepare_step(t);
-            }
-            let nodes = self.nodes.iter_mut().map(|n| (&mut n.system, &n.state));
-            System::begin_steps(t, nodes)
-        }
-        .map_err(|(n, e)| self.eval_error(t, n, e))?;
+        // The units share nothing during a step: each kind does its first half together
+        // (the partitions batch their rate evaluations, on rayon when the step is large
+        // enough), with the bits and the first error of a serial loop in unit order.
+        let scenario = &*self.scenario;
+        Unit::begin_steps(&mut self.nodes, t, scenario, parallel)?;
+        Unit::begin_steps(&mut self.fmus, t, scenario, false)?;
         let max_w = if parallel {
             self.gather_check_parallel(t)?
         } else {
@@ -954,17 +889,9 @@ impl CoSim {
             let signals = self.scenario.cost_signals.iter();
             self.meter.add(signals.map(|&(f, k)| fmus[f].output(k)));
         }
-        let dt = self.scenario.dt;
-        for (unit, spec) in self.fmus.iter_mut().zip(&self.scenario.fmus) {
-            unit.step(spec, t, dt)?;
-        }
-        if parallel {
-            finish_parallel(&mut self.nodes, t).map_err(|(n, e)| self.eval_error(t, n, e))?;
-        } else {
-            for n in 0..self.nodes.len() {
-                finish_node(&mut self.nodes[n], t).map_err(|e| self.eval_error(t, n, e))?;
-            }
-        }
+        let (dt, scenario) = (self.scenario.dt, &*self.scenario);
+        Unit::finish_steps(&mut self.fmus, t, dt, scenario, false)?;
+        Unit::finish_steps(&mut self.nodes, t, dt, scenario, parallel)?;
         self.next_step = Some(SimTime(t.0.saturating_add(self.scenario.dt.0)));
         Ok(())
     }
@@ -1105,7 +1032,7 @@ impl CoSim {
         Error::Diverged(Divergence {
             time: t,
             node: self.link_home[l].0 + 1,
-            place: Place::row(&self.scenario, l),
+            place: self.scenario.place_of_row(l),
             what,
         })
     }
@@ -1119,106 +1046,38 @@ impl CoSim {
             what: "non-finite position or velocity".into(),
         })
     }
+}
 
-    fn eval_error(&self, t: SimTime, node: usize, e: EvalError) -> Error {
-        match e {
-            EvalError::NonFinite { link } => {
-                let g = self.nodes[node].links[link];
-                let l = &self.scenario.links[g];
-                Error::Diverged(Divergence {
-                    time: t,
-                    node: node + 1,
-                    place: Place::row(&self.scenario, g),
-                    what: format!(
-                        "non-finite kinematics (anchors of B{} and B{} coincide or the state is not finite)",
-                        self.scenario.bodies[l.a].id, self.scenario.bodies[l.b].id
-                    ),
-                })
-            }
-            EvalError::Solve(crate::multibody::solver::SolveError::CgBudget {
-                iterations,
-                residual,
-                worst,
-                solves,
-                link,
-                violation,
-                bound,
-            }) => Error::Numerical {
-                time: t,
-                message: format!(
-                    "node {}: the CG budget (solver.max_iterations = {iterations} per solve) cannot hold \
-                     the constraints: {solves} consecutive solves stopped at the budget with a \
-                     residual that alone holds a link off by {residual:.3e} m (SMC: ε μ²‖r‖∞/K; \
-                     worst {worst:.3e} m), and link L{} now has |w| = {violation:.3e} m, \
-                     beyond divergence.max_violation = {bound} m; raise solver.max_iterations or \
-                     use \"solver\": {{\"kind\": \"cholesky\"}}",
-                    node + 1,
-                    self.nodes[node].links[link] + 1
-                ),
-            },
-            EvalError::Solve(_) => Error::Numerical {
-                time: t,
-                message: format!(
-                    "node {}: the multiplier matrix J M⁻¹ Jᵀ is not positive definite \
-                     (redundant links or degenerate geometry)",
-                    node + 1
-                ),
-            },
+/// The unit that sends on `route`: for a signal, the FMU or the partition its
+/// connection reads; for border data, the partition of the sending node.
+fn source<'a>(
+    nodes: &'a mut [Node],
+    fmus: &'a mut [FmuUnit],
+    scenario: &Scenario,
+    route: &Route,
+) -> &'a mut dyn Unit {
+    if route.kind == DataKind::Signal {
+        if let SignalSource::Fmu { fmu, .. } = scenario.connections[route.body].from {
+            return &mut fmus[fmu];
         }
     }
+    &mut nodes[route.from]
 }
 
-/// The second half of node `node`'s step at `t` (the first error stops it where the
-/// serial lock-step stops).
-fn finish_node(node: &mut Node, t: SimTime) -> std::result::Result<(), EvalError> {
-    node.system.finish_step(t, &mut node.state)?;
-    node.book_ghost_impulses();
-    node.restore_held_ghosts();
-    Ok(())
-}
-
-/// Each node's border loads and rates at `t`, the nodes spread over rayon's threads;
-/// the error of the lowest node that fails, as the serial lock-step reports it.
-///
-/// Nodes with the dense exact solve go in chunks of [`BATCH`] (their solves interleave
-/// as in [`System::begin_steps`]), any other node on its own. Every node is prepared
-/// and evaluated, and the errors are reduced to the lowest node's, whatever thread
-/// finished first. Unlike the serial loop, nodes after a failing one have been
-/// evaluated too, which nothing reads: the run stops with that error, and an
-/// evaluation touches only the node's system (its workspace), not its state or its
-/// port accounts; every node is prepared, as in the serial lock-step.
-fn begin_parallel(nodes: &mut [Node], t: SimTime) -> std::result::Result<(), (usize, EvalError)> {
-    let chunk = if nodes.iter().all(|n| n.system.solver.is_dense()) {
-        BATCH
-    } else {
-        1
-    };
-    let first = nodes
-        .par_chunks_mut(chunk)
-        .enumerate()
-        .filter_map(|(c, group)| {
-            for node in group.iter_mut() {
-                node.prepare_step(t);
-            }
-            let systems = group.iter_mut().map(|n| (&mut n.system, &n.state));
-            System::begin_steps(t, systems)
-                .err()
-                .map(|(i, e)| (c * chunk + i, e))
-        })
-        .min_by_key(|&(n, _)| n);
-    first.map_or(Ok(()), Err)
-}
-
-/// [`finish_node`] of every node, spread over rayon's threads; the lowest failing
-/// node's error (the run stops with it: the states of the nodes after it, stepped here
-/// and not in the serial loop, are not read).
-fn finish_parallel(nodes: &mut [Node], t: SimTime) -> std::result::Result<(), (usize, EvalError)> {
-    let first = nodes
-        .par_iter_mut()
-        .enumerate()
-        .filter_map(|(n, node)| finish_node(node, t).err().map(|e| (n, e)))
-        .min_by_key(|&(n, _)| n);
-    first.map_or(Ok(()), Err)
+/// The unit `msg` is for: for a signal, the FMU or the partition its connection sets;
+/// for border data, the partition of the receiving node.
+fn receiver<'a>(
+    nodes: &'a mut [Node],
+    fmus: &'a mut [FmuUnit],
+    scenario: &Scenario,
+    msg: &Message,
+) -> &'a mut dyn Unit {
+    if let Payload::Signal { connection, .. } = msg.payload {
+        if let SignalSink::Fmu { fmu, .. } = scenario.connections[connection].to {
+            return &mut fmus[fmu];
+        }
+    }
+    &mut nodes[msg.to]
 }
 
 /// Link `l`'s gathered values `(w, f)`; `(owner, ll)` its `link_home` (the node named

@@ -26,8 +26,9 @@ pub const DEFAULT_MAX_OUTPUT_BYTES: u64 = 10_000_000_000;
 /// Default bound on the checkpoints one run writes (`--max-checkpoints` lifts it).
 pub const DEFAULT_MAX_CHECKPOINTS: u64 = 1_000;
 /// Default bound on the estimated peak memory [bytes] (`--max-memory` lifts it): 16 GB,
-/// or less where the process may have less ([`default_max_memory`]).
-pub const DEFAULT_MAX_MEMORY_BYTES: u64 = 16_000_000_000;
+/// or less where the process may have less ([`default_max_memory`]). Defined with the
+/// input limits, since it also bounds the checkpoint a resume reads.
+pub use crate::input::DEFAULT_MAX_MEMORY_BYTES;
 /// Peak resident memory of a run before any body [bytes] (measured: 6.3 MB for a 16×16
 /// grid), with room for the allocator's rounding on small scenes.
 pub const MEMORY_BASE: u64 = 10_000_000;

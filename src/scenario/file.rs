@@ -948,19 +948,8 @@ pub struct NetworkFile {
     pub sample: Option<TdmaSample>,
 }
 
-/// `network.sample` (TDMA): which sample a data frame carries.
-#[derive(
-    Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema,
-)]
-#[serde(rename_all = "snake_case")]
-pub enum TdmaSample {
-    /// The sender's state at the frame's start (data as old as the transmission).
-    #[default]
-    Slot,
-    /// The sample taken at the sender's previous frame of the channel (data one period
-    /// old on arrival, plus the transmission).
-    PreviousSlot,
-}
+/// `network.sample` (TDMA): defined with the model, which holds it as read.
+pub use super::model::TdmaSample;
 
 /// `network.jitter`: `{"kind": "uniform", "max": s}` or `{"kind": "exponential", "mean": s}`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]

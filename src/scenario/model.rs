@@ -6,7 +6,11 @@
 
 use nalgebra::{UnitQuaternion, Vector3};
 
+pub mod tdma;
+
+use crate::error::Place;
 use crate::kernel::SimTime;
+pub use tdma::{Jitter, SlotEntry, SlotList, TdmaConfig};
 
 /// Time integrator of the `(x, v, z)` state.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -571,13 +575,13 @@ pub enum NetworkSpec {
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TdmaSpec {
     /// Slot geometry, link, clocks and jitter (`clients` = partition nodes).
-    pub config: crate::network::tdma::TdmaConfig,
+    pub config: TdmaConfig,
     /// An explicit initial slot list; `None` = scheduled from the channels' `tau`.
-    pub slot_list: Option<crate::network::tdma::SlotList>,
+    pub slot_list: Option<SlotList>,
     /// Time from a controller decision to the server's list broadcast (`T_s · m_r`).
     pub decision_lag: SimTime,
     /// Which sample a data frame carries (`network.sample`).
-    pub sample: crate::scenario::file::TdmaSample,
+    pub sample: TdmaSample,
 }
 
 /// The delay-optimization problem (method §5).
@@ -738,6 +742,18 @@ pub struct Scenario {
 }
 
 impl Scenario {
+    /// Where constraint row `l` is (0-based, in the scenario's order: links, then
+    /// joints' rows), as an error names it.
+    pub fn place_of_row(&self, l: usize) -> Place {
+        match self.links[l].joint {
+            Some((j, r)) => Place::JointRow {
+                joint: j as usize + 1,
+                row: r as usize,
+            },
+            None => Place::Link(l + 1),
+        }
+    }
+
     /// Computing nodes: the partition's (1 without one), or more where an FMU runs on
     /// a node of its own.
     pub fn node_count(&self) -> usize {
@@ -749,6 +765,28 @@ impl Scenario {
     pub fn node_of_body(&self, b: usize) -> usize {
         self.partition.as_ref().map_or(0, |p| p.node_of[b])
     }
+}
+
+/// `network.sample` (TDMA): which sample a data frame carries.
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum TdmaSample {
+    /// The sender's state at the frame's start (data as old as the transmission).
+    #[default]
+    Slot,
+    /// The sample taken at the sender's previous frame of the channel (data one period
+    /// old on arrival, plus the transmission).
+    PreviousSlot,
 }
 
 /// One validated `schedule` entry: from `at` on, the channels are asked for `tau` [s].

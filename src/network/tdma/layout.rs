@@ -15,26 +15,7 @@ use super::config::TdmaConfig;
 use super::error::TdmaError;
 use super::frame::{entries_per_fragment, list_broadcast_bytes, transmission_time, FrameSizes};
 use crate::kernel::SimTime;
-
-/// One dynamic slot's use: `sender` transmits its data of `channel`.
-#[derive(
-    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize,
-)]
-pub struct SlotEntry {
-    /// Sending TDMA node (0 = server).
-    pub sender: usize,
-    /// Channel index.
-    pub channel: usize,
-}
-
-/// The dynamic part of a cycle: entry `j` is dynamic slot `j` (`None` = idle); slots
-/// past the end of the list are idle. The same list repeats every cycle until a new
-/// one goes into force.
-#[derive(Debug, Clone, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
-pub struct SlotList {
-    /// Entries in dynamic-slot order.
-    pub entries: Vec<Option<SlotEntry>>,
-}
+pub use crate::scenario::model::tdma::{SlotEntry, SlotList};
 
 impl SlotList {
     /// A list with no idle slot in between.

@@ -4,14 +4,12 @@
 //! bounds are known.
 
 use super::checks::{foreign, non_negative, num, positive, required, time, whole_nanos};
-use crate::cosim::TdmaLink;
+use crate::cosim::fit::{check_tdma as check_fit, Misfit};
 use crate::error::{Error, Result};
 use crate::kernel::SimTime;
 use crate::network::tdma::{Jitter, SlotEntry, SlotList, TdmaConfig, TdmaError};
 use crate::scenario::file::{JitterFile, JitterKind, NetworkFile, NetworkKind, SlotEntryFile};
-use crate::scenario::model::{
-    ChannelSpec, ControllerSpec, NetworkSpec, PartitionSpec, Problem, Scenario, TdmaSpec,
-};
+use crate::scenario::model::{ChannelSpec, NetworkSpec, PartitionSpec, Scenario, TdmaSpec};
 
 /// The `network` section.
 pub(super) fn network(
@@ -242,85 +240,43 @@ pub(in crate::scenario) fn tdma_error(e: TdmaError) -> Error {
     Error::invalid(path, message)
 }
 
-/// The finished scenario's TDMA network builds: every frame fits its slot, the initial
-/// list (given or scheduled) fits the cycle, every `schedule` entry can be scheduled,
-/// and a controller's every channel at `tau_min` can be scheduled (so no decision
-/// within the bounds is refused).
+/// The finished scenario's TDMA network carries it (the world's check,
+/// [`crate::cosim::fit::check_tdma`]: every frame fits its slot, the initial list fits
+/// the cycle, every `schedule` entry and a controller's every choice can be scheduled),
+/// its findings named by the scenario's fields.
 pub(super) fn check_tdma(s: &Scenario) -> Result<()> {
-    let NetworkSpec::Tdma(_) = &s.network else {
-        return Ok(());
-    };
-    let layout = crate::partition::Layout::new(s);
-    let channels = crate::cosim::world::channels_of(s, &layout);
-    let link = TdmaLink::new(s, &channels).map_err(|e| {
-        // A frame that is too long under a predicting coupling may fit under `reset`,
-        // whose messages carry no force rates and no energy reports: say so.
-        let predicts = s.partition.as_ref().is_some_and(|p| p.coupling.predicts());
-        let hint = matches!(e, TdmaError::FrameTooLong { .. }) && predicts;
-        match tdma_error(e) {
-            Error::Invalid { path, message } if hint => Error::Invalid {
-                path,
-                message: format!(
-                    "{message}; the partition's coupling sends force rates (and, passive, \
-                     energy reports and the waves of its transmission lines) with every \
-                     message: widen the slot, raise the link rate, or use \"coupling\": \
-                     \"reset\""
-                ),
-            },
-            other => other,
+    check_fit(s).map_err(|misfit| match misfit {
+        Misfit::Network { error, predicts } => {
+            // A frame that is too long under a predicting coupling may fit under
+            // `reset`, whose messages carry no force rates and no energy reports: say so.
+            let hint = matches!(error, TdmaError::FrameTooLong { .. }) && predicts;
+            match tdma_error(error) {
+                Error::Invalid { path, message } if hint => Error::Invalid {
+                    path,
+                    message: format!(
+                        "{message}; the partition's coupling sends force rates (and, passive, \
+                         energy reports and the waves of its transmission lines) with every \
+                         message: widen the slot, raise the link rate, or use \"coupling\": \
+                         \"reset\""
+                    ),
+                },
+                other => other,
+            }
         }
-    })?;
-    for (i, entry) in s.schedule.iter().enumerate() {
-        link.schedule_secs(&entry.tau).map_err(|e| {
-            Error::invalid(
-                format!("schedule[{i}].tau"),
-                format!("the TDMA cycle cannot serve these periods ({e})"),
-            )
-        })?;
-    }
-    let Some(c) = &s.controller else {
-        return Ok(());
-    };
-    for taus in extreme_requests(s, c) {
-        link.schedule_secs(&taus).map_err(|e| {
+        Misfit::Schedule { entry, error } => Error::invalid(
+            format!("schedule[{entry}].tau"),
+            format!("the TDMA cycle cannot serve these periods ({error})"),
+        ),
+        Misfit::Controller { taus, error } => {
             let shown: Vec<String> = taus.iter().map(|&t| num(t)).collect();
             Error::invalid(
                 "controller.tau_min",
                 format!(
                     "the TDMA cycle cannot serve the delays [{}] s that the controller may \
-                     choose within its bounds ({e})",
+                     choose within its bounds ({error})",
                     shown.join(", ")
                 ),
             )
-        })?;
-    }
-    Ok(())
-}
-
-/// The requests that need the most slots among a controller's choices: every channel
-/// at `tau_min` for UP; for CP each channel at the smallest delay the budget leaves it
-/// when the others sit at `tau_max` (the slot demand `Σ senders/τ` is largest at such
-/// a vertex of the budget set).
-fn extreme_requests(s: &Scenario, c: &ControllerSpec) -> Vec<Vec<f64>> {
-    let n = s.channels.len();
-    match c.problem {
-        Problem::Unconstrained { .. } => vec![vec![c.tau_min; n]],
-        Problem::Constrained { budget } => (0..n)
-            .map(|i| {
-                let others: f64 = (0..n)
-                    .filter(|&j| j != i)
-                    .map(|j| s.channels[j].k / c.tau_max)
-                    .sum();
-                let left = budget - others;
-                let tau_i = if left > 0.0 {
-                    (s.channels[i].k / left).max(c.tau_min)
-                } else {
-                    c.tau_max
-                };
-                let mut taus = vec![c.tau_max; n];
-                taus[i] = tau_i.min(c.tau_max);
-                taus
-            })
-            .collect(),
-    }
+        }
+    })
 }

@@ -1,0 +1,89 @@
+//! The one interface the world steps its units through: a multibody partition (one per
+//! node, [`crate::partition::Node`]) and an FMU ([`super::fmus::FmuUnit`]) both implement
+//! [`Unit`], the way [`crate::control::Plant`] is all the controller knows of the world.
+//!
+//! A unit samples what it sends on a route, takes what is delivered to it, and steps
+//! in two halves around the observers' look at each step. The kernel, the channels and
+//! the TDMA network see only routes and messages, never what a unit computes; the world
+//! finds a route's source and a message's receiver and hands them over. A unit's state
+//! is saved and restored as the world's is: `Clone` is a fork, serde a checkpoint (an
+//! FMU carries its instance's serialized FMU state in both).
+
+use nalgebra::Vector3;
+
+use crate::error::Result;
+use crate::kernel::SimTime;
+use crate::network::route::Route;
+use crate::network::{Message, Payload};
+use crate::scenario::model::Scenario;
+
+/// What a unit sends on a route at a sample time: the payload, and the momentum its
+/// links have made so far where a predicting coupling reports it.
+pub type Sampled = (Payload, Option<Vector3<f64>>);
+
+/// A unit of the co-simulation world.
+pub trait Unit: Send + Sync {
+    /// What this unit, the source of `route`, sends on it sampled at `t`; `None` when
+    /// it has nothing to send on it then.
+    fn sample(&mut self, t: SimTime, route: &Route, scenario: &Scenario) -> Option<Sampled>;
+
+    /// `msg`, for this unit, was just sampled: the unit keeps what it will compare the
+    /// sample with when it arrives (a partition: its ghost's or port's state of the
+    /// sample time). Nothing by default.
+    fn sampled(&mut self, _msg: &Message) {}
+
+    /// `msg` reaches this unit; `state_time` is the time of the state the units hold
+    /// (the next step's).
+    fn deliver(&mut self, msg: &Message, state_time: SimTime, scenario: &Scenario);
+
+    /// Unit `index` of its kind: the first half of the lock-step at `t`, what it
+    /// evaluates at `t` before the observers see step `t`. Nothing by default (an FMU
+    /// computes from one communication point to the next, in the second half).
+    fn begin_step(&mut self, _index: usize, _t: SimTime, _scenario: &Scenario) -> Result<()> {
+        Ok(())
+    }
+
+    /// Unit `index` of its kind: the second half, from `t` to `t + dt`.
+    fn finish_step(
+        &mut self,
+        index: usize,
+        t: SimTime,
+        dt: SimTime,
+        scenario: &Scenario,
+    ) -> Result<()>;
+
+    /// Every unit's [`begin_step`](Unit::begin_step), in order, the first error
+    /// stopping them. A kind may do them together (batched solves, rayon's threads when
+    /// `parallel`) if the bits and the first error are those of the serial loop.
+    fn begin_steps(
+        units: &mut [Self],
+        t: SimTime,
+        scenario: &Scenario,
+        _parallel: bool,
+    ) -> Result<()>
+    where
+        Self: Sized,
+    {
+        for (i, unit) in units.iter_mut().enumerate() {
+            unit.begin_step(i, t, scenario)?;
+        }
+        Ok(())
+    }
+
+    /// Every unit's [`finish_step`](Unit::finish_step), under the same rule.
+    fn finish_steps(
+        units: &mut [Self],
+        t: SimTime,
+        dt: SimTime,
+        scenario: &Scenario,
+        _parallel: bool,
+    ) -> Result<()>
+    where
+        Self: Sized,
+    {
+        for (i, unit) in units.iter_mut().enumerate() {
+            unit.finish_step(i, t, dt, scenario)?;
+        }
+        Ok(())
+    }
+}
