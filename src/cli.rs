@@ -572,11 +572,13 @@ fn expect_kind(path: &std::path::Path, wanted: FileKind, command: &str) -> crate
     let found = file_kind(path);
     let hint = match (wanted, found) {
         (FileKind::Scenario, Some(FileKind::Sweep)) => format!(
-            "is a sweep file (it has `base` and `axes`), not a scenario: run its points with              `dsmcosim sweep {} -o DIR`",
+            "is a sweep file (it has `base` and `axes`), not a scenario: run its points with \
+             `dsmcosim sweep {} -o DIR`",
             path.display()
         ),
         (FileKind::Sweep, Some(FileKind::Scenario)) => format!(
-            "is a scenario file (it has `model` and `duration`), not a sweep: run it with              `dsmcosim run {} -o DIR`",
+            "is a scenario file (it has `model` and `duration`), not a sweep: run it with \
+             `dsmcosim run {} -o DIR`",
             path.display()
         ),
         _ => return Ok(()),

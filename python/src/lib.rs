@@ -8,6 +8,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
+use dsmcosim::control::Plant;
 use dsmcosim::cosim::CoSim;
 use dsmcosim::kernel::SimTime;
 use dsmcosim::progress::{reporting_to, Listener};
@@ -201,7 +202,9 @@ fn sweep(
 
 /// A co-simulation steered from Python window by window: the same world the command
 /// line runs, with a recorder that digests every step (no files), so a steered run has
-/// a digest comparable with the command line's.
+/// a digest comparable with the command line's. It advances, sets the periods and reads
+/// the last window through `control::Plant`, the interface the crate's controllers use
+/// (and forks it by `Clone`, as they do).
 #[pyclass(name = "CoSim", module = "dsmcosim")]
 struct PyCoSim {
     world: CoSim,
@@ -229,7 +232,8 @@ impl PyCoSim {
         if !scenario.schedule.is_empty() {
             return Err(dsmcosim::Error::invalid(
                 "schedule",
-                "a CoSim is steered from Python: give a scenario without a schedule                  (set_periods makes those decisions; CoSim.schedule() writes them down)",
+                "a CoSim is steered from Python: give a scenario without a schedule \
+                 (set_periods makes those decisions; CoSim.schedule() writes them down)",
             ));
         }
         dsmcosim::run::preflight(scenario, &RunOptions::default())?;
@@ -363,7 +367,7 @@ impl PyCoSim {
                 // The end: the step at `duration` too, as a run to its end takes it.
                 world.run_to_end(recorder)
             } else {
-                world.advance_to(target, recorder)
+                Plant::advance_to(world, target, recorder)
             }
         });
         done.map_err(|e| py_error(py, e))
@@ -393,7 +397,7 @@ impl PyCoSim {
         })();
         let achieved = checked.map_err(|e| py_error(py, e))?;
         let now = self.world.now();
-        let set = self.world.set_taus(now, &periods, &achieved).map_err(|e| {
+        let set = Plant::set_taus(&mut self.world, now, &periods, &achieved).map_err(|e| {
             py_error(
                 py,
                 dsmcosim::Error::invalid(
@@ -416,7 +420,8 @@ impl PyCoSim {
         for (i, (at, tau)) in self.decisions.iter().enumerate() {
             let why = if at.0 % period.0 != 0 {
                 Some(format!(
-                    "was made at {} s, off the measurement window boundaries (multiples of                      {} s) where a schedule changes periods",
+                    "was made at {} s, off the measurement window boundaries (multiples of \
+                     {} s) where a schedule changes periods",
                     at.as_secs_f64(),
                     period.as_secs_f64()
                 ))
@@ -442,10 +447,7 @@ impl PyCoSim {
     /// The last closed measurement window: `(t_end [s], cost [m])`, or None before the
     /// first (the scenario's `measurement.period` sets the windows).
     fn window_cost(&self) -> Option<(f64, f64)> {
-        self.world
-            .epochs()
-            .last()
-            .map(|e| (e.t_end.as_secs_f64(), e.cost))
+        Plant::last_window(&self.world).map(|(end, cost)| (end.as_secs_f64(), cost))
     }
 
     /// An independent copy to try something on: advancing or steering it leaves this
