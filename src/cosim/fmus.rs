@@ -20,7 +20,7 @@
 
 use std::sync::{Arc, Mutex};
 
-use super::unit::{Sampled, Unit};
+use super::unit::Unit;
 use crate::error::{Error, Result};
 use crate::fmu::{Fmu, Instance};
 use crate::kernel::SimTime;
@@ -290,13 +290,20 @@ impl<'de> serde::Deserialize<'de> for FmuUnit {
 /// the inputs they deliver (held to its next communication point), and computes in the
 /// second half of each lock-step, from one communication point to the next.
 impl Unit for FmuUnit {
-    fn sample(&mut self, _t: SimTime, route: &Route, scenario: &Scenario) -> Option<Sampled> {
+    fn sample(
+        &mut self,
+        t: SimTime,
+        channel: usize,
+        route: &Route,
+        scenario: &Scenario,
+    ) -> Option<Message> {
         let connection = route.body;
         let SignalSource::Fmu { output, .. } = scenario.connections[connection].from else {
             return None;
         };
         let value = self.output(output);
-        Some((Payload::Signal { connection, value }, None))
+        let payload = Payload::Signal { connection, value };
+        Some(Message::on(route, channel, t, payload, None))
     }
 
     fn deliver(&mut self, msg: &Message, _state_time: SimTime, scenario: &Scenario) {

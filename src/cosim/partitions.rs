@@ -6,7 +6,7 @@
 
 use rayon::prelude::*;
 
-use super::unit::{Sampled, Unit};
+use super::unit::Unit;
 use crate::error::{Divergence, Error, Result};
 use crate::kernel::SimTime;
 use crate::multibody::dynamics::EvalError;
@@ -18,7 +18,13 @@ use crate::partition::Node;
 use crate::scenario::model::{DataKind, Scenario, SignalSink, SignalSource};
 
 impl Unit for Node {
-    fn sample(&mut self, t: SimTime, route: &Route, scenario: &Scenario) -> Option<Sampled> {
+    fn sample(
+        &mut self,
+        t: SimTime,
+        channel: usize,
+        route: &Route,
+        scenario: &Scenario,
+    ) -> Option<Message> {
         let payload = match (route.kind, route.link) {
             (DataKind::Signal, _) => {
                 let SignalSource::Body { body, quantity } = scenario.connections[route.body].from
@@ -27,7 +33,8 @@ impl Unit for Node {
                 };
                 let value = self.body_value(body, quantity);
                 let connection = route.body;
-                return Some((Payload::Signal { connection, value }, None));
+                let payload = Payload::Signal { connection, value };
+                return Some(Message::on(route, channel, t, payload, None));
             }
             (DataKind::State, _) => {
                 let mut payload = self.state_payload(t, route.body, route.to);
@@ -42,7 +49,13 @@ impl Unit for Node {
             (DataKind::Force, Some(l)) => self.force_payload(l, route.body),
             (DataKind::Force, None) => return None,
         };
-        Some((payload, self.momentum_made(t)))
+        Some(Message::on(
+            route,
+            channel,
+            t,
+            payload,
+            self.momentum_made(t),
+        ))
     }
 
     fn sampled(&mut self, msg: &Message) {

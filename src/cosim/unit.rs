@@ -9,23 +9,25 @@
 //! is saved and restored as the world's is: `Clone` is a fork, serde a checkpoint (an
 //! FMU carries its instance's serialized FMU state in both).
 
-use nalgebra::Vector3;
-
 use crate::error::Result;
 use crate::kernel::SimTime;
 use crate::network::route::Route;
-use crate::network::{Message, Payload};
+use crate::network::Message;
 use crate::scenario::model::Scenario;
-
-/// What a unit sends on a route at a sample time: the payload, and the momentum its
-/// links have made so far where a predicting coupling reports it.
-pub type Sampled = (Payload, Option<Vector3<f64>>);
 
 /// A unit of the co-simulation world.
 pub trait Unit: Send + Sync {
-    /// What this unit, the source of `route`, sends on it sampled at `t`; `None` when
-    /// it has nothing to send on it then.
-    fn sample(&mut self, t: SimTime, route: &Route, scenario: &Scenario) -> Option<Sampled>;
+    /// The message this unit, the source of `route`, sends on it over `channel`,
+    /// sampled at `t` ([`Message::on`]); `None` when it has nothing to send on it then.
+    /// Built by the unit whole, where it is returned: a state message is a few hundred
+    /// bytes, and every copy of it on the way to the event queue costs (callgrind).
+    fn sample(
+        &mut self,
+        t: SimTime,
+        channel: usize,
+        route: &Route,
+        scenario: &Scenario,
+    ) -> Option<Message>;
 
     /// `msg`, for this unit, was just sampled: the unit keeps what it will compare the
     /// sample with when it arrives (a partition: its ghost's or port's state of the

@@ -753,16 +753,7 @@ impl CoSim {
     fn message(&mut self, t: SimTime, c: usize, r: usize) -> Option<Message> {
         let route = self.channels[c].routes[r];
         let scenario = &*self.scenario;
-        let unit = source(&mut self.nodes, &mut self.fmus, scenario, &route);
-        let (payload, momentum) = unit.sample(t, &route, scenario)?;
-        Some(Message {
-            from: route.from,
-            to: route.to,
-            channel: c,
-            sent: t,
-            payload,
-            momentum,
-        })
+        source(&mut self.nodes, &mut self.fmus, scenario, &route).sample(t, c, &route, scenario)
     }
 
     /// Puts `msg` in flight, to arrive at `at`. A state message also makes its receiver

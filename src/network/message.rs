@@ -131,3 +131,24 @@ pub struct Message {
     #[serde(default)]
     pub momentum: Option<Vector3<f64>>,
 }
+
+impl Message {
+    /// The message of `route` on `channel`, sampled at `sent`.
+    #[inline]
+    pub fn on(
+        route: &crate::network::route::Route,
+        channel: usize,
+        sent: SimTime,
+        payload: Payload,
+        momentum: Option<Vector3<f64>>,
+    ) -> Message {
+        Message {
+            from: route.from,
+            to: route.to,
+            channel,
+            sent,
+            payload,
+            momentum,
+        }
+    }
+}
