@@ -314,13 +314,16 @@ impl Unit for FmuUnit {
         }
     }
 
-    fn finish_step(
-        &mut self,
-        index: usize,
+    fn finish_steps(
+        units: &mut [FmuUnit],
         t: SimTime,
         dt: SimTime,
         scenario: &Scenario,
+        _parallel: bool,
     ) -> Result<()> {
-        self.step(&scenario.fmus[index], t, dt)
+        for (unit, spec) in units.iter_mut().zip(&scenario.fmus) {
+            unit.step(spec, t, dt)?;
+        }
+        Ok(())
     }
 }

@@ -80,23 +80,6 @@ impl Unit for Node {
         self.apply(msg.from, msg.sent, state_time, &msg.payload);
     }
 
-    fn begin_step(&mut self, _index: usize, t: SimTime, scenario: &Scenario) -> Result<()> {
-        self.prepare_step(t);
-        self.system
-            .begin_step(t, &self.state)
-            .map_err(|e| eval_error(self, t, e, scenario))
-    }
-
-    fn finish_step(
-        &mut self,
-        _index: usize,
-        t: SimTime,
-        _dt: SimTime,
-        scenario: &Scenario,
-    ) -> Result<()> {
-        finish_node(self, t).map_err(|e| eval_error(self, t, e, scenario))
-    }
-
     /// The nodes' rate evaluations batched (results and first error as if evaluated
     /// one after another in node order), on rayon when `parallel`; a monolithic
     /// world's one node has no border to prepare.

@@ -38,54 +38,33 @@ pub trait Unit: Send + Sync {
     /// (the next step's).
     fn deliver(&mut self, msg: &Message, state_time: SimTime, scenario: &Scenario);
 
-    /// Unit `index` of its kind: the first half of the lock-step at `t`, what it
-    /// evaluates at `t` before the observers see step `t`. Nothing by default (an FMU
-    /// computes from one communication point to the next, in the second half).
-    fn begin_step(&mut self, _index: usize, _t: SimTime, _scenario: &Scenario) -> Result<()> {
-        Ok(())
-    }
-
-    /// Unit `index` of its kind: the second half, from `t` to `t + dt`.
-    fn finish_step(
-        &mut self,
-        index: usize,
-        t: SimTime,
-        dt: SimTime,
-        scenario: &Scenario,
-    ) -> Result<()>;
-
-    /// Every unit's [`begin_step`](Unit::begin_step), in order, the first error
-    /// stopping them. A kind may do them together (batched solves, rayon's threads when
-    /// `parallel`) if the bits and the first error are those of the serial loop.
+    /// The first half of the lock-step at `t` for every unit of this kind, in order,
+    /// the first error stopping them: what they evaluate at `t` before the observers
+    /// see step `t`. Nothing by default (an FMU computes from one communication point
+    /// to the next, in the second half). A kind may do it together (a partition: its
+    /// dense solves batched, on rayon's threads when `parallel`) if the bits and the
+    /// first error are those of a serial loop in unit order.
     fn begin_steps(
-        units: &mut [Self],
-        t: SimTime,
-        scenario: &Scenario,
+        _units: &mut [Self],
+        _t: SimTime,
+        _scenario: &Scenario,
         _parallel: bool,
     ) -> Result<()>
     where
         Self: Sized,
     {
-        for (i, unit) in units.iter_mut().enumerate() {
-            unit.begin_step(i, t, scenario)?;
-        }
         Ok(())
     }
 
-    /// Every unit's [`finish_step`](Unit::finish_step), under the same rule.
+    /// The second half, from `t` to `t + dt`, for every unit of this kind, under the
+    /// same rule.
     fn finish_steps(
         units: &mut [Self],
         t: SimTime,
         dt: SimTime,
         scenario: &Scenario,
-        _parallel: bool,
+        parallel: bool,
     ) -> Result<()>
     where
-        Self: Sized,
-    {
-        for (i, unit) in units.iter_mut().enumerate() {
-            unit.finish_step(i, t, dt, scenario)?;
-        }
-        Ok(())
-    }
+        Self: Sized;
 }
