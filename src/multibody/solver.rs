@@ -574,9 +574,24 @@ fn cholesky_column(
     for &l in &row_j[..j] {
         d -= l * l;
     }
-    // Singular to working precision (see SINGULAR_PIVOT), or not a number.
-    if d.is_nan() || d <= SINGULAR_PIVOT * max_diag {
+    // Not a number, or clearly negative: `A = J M⁻¹ Jᵀ` is positive semi-definite
+    // for any finite geometry and positive masses, so this is no mechanism's.
+    if d.is_nan() || d < -SINGULAR_PIVOT * max_diag {
         return Err(SolveError::NotPositiveDefinite);
+    }
+    // Zero to working precision (see SINGULAR_PIVOT): row `j` depends on the rows
+    // before it (a redundant constraint, or a mechanism at a singular position). It is
+    // dropped: its multiplier is zero and no later row leans on it, so the rest is the
+    // factorization of `A` without row and column `j`, and the rows kept carry the
+    // whole constraint force (the same `Jᵀ z` when the right-hand side is consistent,
+    // as a redundant row's is: it asks what the others already ask).
+    if d <= SINGULAR_PIVOT * max_diag {
+        row_j[j] = 1.0;
+        for row_i in below.chunks_exact_mut(m) {
+            row_i[j] = 0.0;
+        }
+        x[j] = 0.0;
+        return Ok(());
     }
     let d = d.sqrt();
     row_j[j] = d;
@@ -799,11 +814,45 @@ mod tests {
         }
     }
 
+    /// `M⁻¹`-free check of a solution: the residual `A x − b` relative to `b`, and the
+    /// body forces `Jᵀ x` against `Jᵀ x_true` (what the dynamics sees).
+    fn check_dependent(geo: &Geometry, mass: &MassData, x: &[f64], truth: &[f64], what: &str) {
+        let m = x.len();
+        let mut s = JsSolver::exact(ExactPath::Dense, mass.inv_mass.len(), &geo.ends);
+        let (mut ax, mut b) = (vec![0.0; m], vec![0.0; m]);
+        s.apply(geo, mass, x, &mut ax);
+        s.apply(geo, mass, truth, &mut b);
+        let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let r: Vec<f64> = ax.iter().zip(&b).map(|(a, b)| a - b).collect();
+        assert!(
+            norm(&r) <= 1e-9 * norm(&b),
+            "{what}: residual {:e}",
+            norm(&r)
+        );
+        let forces = |z: &[f64]| {
+            let mut f = vec![Vector3::zeros(); mass.inv_mass.len()];
+            for (k, &(p, q)) in geo.ends.iter().enumerate() {
+                f[p] += geo.n[k] * z[k];
+                f[q] -= geo.n[k] * z[k];
+            }
+            f
+        };
+        // A row dropped as dependent to round-off (a pivot below SINGULAR_PIVOT, whose
+        // square root is 3.2e-7) may leave out that much of its force.
+        for (i, (f, g)) in forces(x).iter().zip(forces(truth)).enumerate() {
+            assert!(
+                (f - g).norm() < 1e-6,
+                "{what}: body {i} feels {f:?}, not {g:?}"
+            );
+        }
+    }
+
     #[test]
-    fn exact_solve_reports_a_singular_system() {
-        // Two identical links between the same bodies: A is singular. Exactly singular
-        // (a zero pivot) and singular to round-off (a pivot of 1e-16 of the diagonal)
-        // are both reported, on both factorizations.
+    fn a_dependent_row_is_dropped_and_the_rest_carries_the_force() {
+        // Two links between the same bodies along the same line: the second row is
+        // the first's (exactly, and to round-off at a tilt of 1e-8). A right-hand side
+        // the links can meet (b = A x for multipliers x) is met, and the bodies feel
+        // the same forces, on both factorizations: the dependent row is dropped.
         for tilt in [0.0, 1e-8] {
             let geo = Geometry {
                 ends: vec![(0, 1), (0, 1), (1, 2)],
@@ -819,28 +868,48 @@ mod tests {
                 inv_mass: vec![1.0, 1.0, 1.0],
                 inv_inertia: vec![],
             };
+            let truth = [0.7, 0.3, -0.5];
+            let mut b = [0.0; 3];
+            JsSolver::exact(ExactPath::Dense, 3, &geo.ends).apply(&geo, &mass, &truth, &mut b);
             for path in [ExactPath::Dense, ExactPath::Ordered] {
                 let mut s = JsSolver::exact(path, 3, &geo.ends);
                 let mut x = [0.0; 3];
-                let r = s.solve(&geo, &mass, &[1.0, 0.0, 0.5], &mut x);
-                assert!(r.is_err(), "{path:?}, tilt {tilt}: {x:?}");
+                s.solve(&geo, &mass, &b, &mut x)
+                    .unwrap_or_else(|e| panic!("{path:?}, tilt {tilt}: {e:?}"));
+                check_dependent(&geo, &mass, &x, &truth, &format!("{path:?}, tilt {tilt}"));
             }
         }
     }
 
     #[test]
-    fn the_supernodal_factorization_reports_a_singular_system() {
+    fn a_non_finite_system_is_still_an_error() {
+        let (mut geo, mass) = chain(4);
+        geo.n[2] = Vector3::new(f64::NAN, 0.0, 0.0);
+        for path in [ExactPath::Dense, ExactPath::Ordered] {
+            let mut s = JsSolver::exact(path, 5, &geo.ends);
+            let mut x = [0.0; 4];
+            let r = s.solve(&geo, &mass, &[1.0, 0.0, 0.5, 1.0], &mut x);
+            assert_eq!(r, Err(SolveError::NotPositiveDefinite), "{path:?}");
+        }
+    }
+
+    #[test]
+    fn the_supernodal_factorization_drops_a_dependent_row() {
         // A chain long enough for the supernodal path whose second link repeats the
         // first (same bodies, same direction).
         let m = ordered::SUPERNODAL_MIN_LINKS + 10;
         let (mut geo, mass) = chain(m);
         geo.ends[1] = geo.ends[0];
         geo.n[1] = geo.n[0];
-        let b: Vec<f64> = (0..m).map(|k| (k as f64).cos()).collect();
+        let truth: Vec<f64> = (0..m).map(|k| (k as f64).cos()).collect();
+        let mut b = vec![0.0; m];
+        JsSolver::exact(ExactPath::Dense, m + 1, &geo.ends).apply(&geo, &mass, &truth, &mut b);
         let mut s = JsSolver::new(Solver::Cholesky, m + 1, &geo.ends);
         let mut x = vec![0.0; m];
-        assert!(s.solve(&geo, &mass, &b, &mut x).is_err());
-        // The same chain without the repeat solves.
+        s.solve(&geo, &mass, &b, &mut x).unwrap();
+        check_dependent(&geo, &mass, &x, &truth, "supernodal");
+        // The same chain without the repeat solves to the same bits as before: the
+        // regularized factorization runs only where a pivot vanished.
         let (geo, mass) = chain(m);
         let mut s = JsSolver::new(Solver::Cholesky, m + 1, &geo.ends);
         s.solve(&geo, &mass, &b, &mut x).unwrap();

@@ -1,8 +1,13 @@
 //! The model's centre-of-mass velocity as every node knows it without a message.
 //!
-//! Only the scenario's external forces change the total momentum of the net; every node
-//! has the scenario, so every node can integrate `P(t) = P(0) + ∫ Σ F_ext dt` itself and
-//! agree, bit for bit, on the centre of mass's velocity `P / M` at each step. The
+//! Only the scenario's external forces and uniform gravity change the total momentum of
+//! a free net; every node has the scenario, so every node can integrate
+//! `P(t) = P(0) + ∫ (Σ F_ext + M g) dt` itself and agree, bit for bit, on the centre of
+//! mass's velocity `P / M` at each step. Gravity belongs in it: left out, the reference
+//! falls behind the net it measures, and a uniform field that changes no relative
+//! motion would show up as border power the account brakes. A scene held to the world
+//! (a joint to a fixed point) is not free: the world's unknown reaction carries its
+//! weight, so there the reference leaves gravity out, as it leaves out that reaction. The
 //! transmission lines ([`super::line`]) measure their ends' velocities against it:
 //! a reference that is the same at both ends of every line at the same time, moves
 //! with any uniform velocity added to the net (so the lines are the same in every
@@ -22,6 +27,9 @@ pub struct ComReference {
     momentum: Vector3<f64>,
     /// Every external force of the model.
     forces: Vec<ForceSpec>,
+    /// Uniform gravity [m/s²] on a free scene (every body of a scenario is movable);
+    /// `None`: none, or a scene held to the world.
+    gravity: Option<Vector3<f64>>,
     /// Time of `momentum`.
     at: SimTime,
 }
@@ -37,6 +45,12 @@ impl ComReference {
                 .map(|b| b.velocity * b.mass)
                 .fold(Vector3::zeros(), |a, b| a + b),
             forces: scenario.forces.clone(),
+            // A mechanism held to the world does not fall: the world's reaction, which
+            // no node knows without a message, carries its weight. Its frame is the
+            // world's, and the reference stays what its loads alone make it.
+            gravity: scenario
+                .gravity
+                .filter(|_| !scenario.links.iter().any(|l| l.world)),
             at: SimTime::ZERO,
         }
     }
@@ -51,6 +65,9 @@ impl ComReference {
         let h = SimTime(t.0 - self.at.0).as_secs_f64();
         for f in &self.forces {
             self.momentum += f.at(self.at) * h;
+        }
+        if let Some(g) = self.gravity {
+            self.momentum += g * (self.mass * h);
         }
         self.at = t;
     }

@@ -257,6 +257,9 @@ pub struct LineEnd {
     /// flight, to compare with the owner end's when the sample arrives
     /// (`partition::momentum`).
     pub impulse_history: std::collections::VecDeque<(SimTime, Vector3<f64>)>,
+    /// Uniform gravity [m/s²] the far body falls with between its samples; `None`:
+    /// none.
+    gravity: Option<Vector3<f64>>,
 }
 
 impl LineEnd {
@@ -301,14 +304,27 @@ impl LineEnd {
             given: 0.0,
             impulse: Vector3::zeros(),
             impulse_history: std::collections::VecDeque::new(),
+            gravity: None,
         }
     }
 
-    /// Where the far anchor is estimated to be at `t` (its last sample carried forward
-    /// with its velocity).
+    /// The end with uniform gravity `g` [m/s²] acting on the far body, which then
+    /// falls between its samples as every body does.
+    pub fn falling(mut self, g: Option<Vector3<f64>>) -> LineEnd {
+        self.gravity = g;
+        self
+    }
+
+    /// Where the far anchor is estimated to be at `t`: its last sample carried forward
+    /// with its velocity, and with the fall uniform gravity gives every body (left
+    /// out, a falling net's lines saw each far end `g age²/2` above where it is).
     pub fn far_anchor(&self, t: SimTime) -> Vector3<f64> {
         let age = SimTime(t.0.saturating_sub(self.far.sent.0)).as_secs_f64();
-        self.far.p + self.far.v * age
+        let p = self.far.p + self.far.v * age;
+        match self.gravity {
+            Some(g) => p + g * (0.5 * age * age),
+            None => p,
+        }
     }
 
     /// The step of length `h` [s] at `t`, this end's anchor at `p` moving at `v`: sets

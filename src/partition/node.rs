@@ -956,15 +956,18 @@ fn line_ends(
             } else {
                 n_ab.dot(&(vb - reference))
             };
-            ends.push(LineEnd::new(
-                l,
-                local,
-                anchor,
-                (far, far_node, p, v),
-                layout.link_owner[l] == index,
-                (z, delay),
-                initial_wave(z, delay, stretch, rate),
-            ));
+            ends.push(
+                LineEnd::new(
+                    l,
+                    local,
+                    anchor,
+                    (far, far_node, p, v),
+                    layout.link_owner[l] == index,
+                    (z, delay),
+                    initial_wave(z, delay, stretch, rate),
+                )
+                .falling(scenario.gravity),
+            );
         }
     }
     ends

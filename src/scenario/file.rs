@@ -26,6 +26,14 @@ pub const DEFAULT_SMC_MU: f64 = 0.05;
 pub const DEFAULT_SMC_K: f64 = 10.0;
 /// Default SMC boundary-layer width ε [m] (thesis).
 pub const DEFAULT_SMC_EPSILON: f64 = 0.1;
+/// Baumgarte's α and β [1/s] when a scene with joints gives no `stabilizer`, or gives
+/// `"baumgarte"` without them: a constraint error decays critically damped with a
+/// 50 ms time constant. Slow next to any step a mechanism runs at (RK4 holds the
+/// error equation's double pole −β for `β dt < 2.78`, dt < 0.14 s), so the law stays
+/// far from the integrator's limit and from a border's delays (a few ms), while the
+/// exact multipliers keep the joints closed to the integrator's truncation error
+/// (the drift they correct) rather than to a law's lag.
+pub const DEFAULT_BAUMGARTE_RATE: f64 = 20.0;
 /// Default CG iteration budget per solve (see [`SolverFile::max_iterations`]).
 pub const DEFAULT_CG_MAX_ITERATIONS: usize = 50;
 /// Default CG relative residual tolerance [1] (see [`SolverFile::tolerance`]).
@@ -93,9 +101,16 @@ pub struct ScenarioFile {
     /// Time integrator; default `"euler"` (the thesis's integrator).
     #[serde(default)]
     pub integrator: IntegratorFile,
-    /// Constraint stabilizer; default SMC with the thesis parameters.
-    #[serde(default)]
-    pub stabilizer: StabilizerFile,
+    /// Constraint stabilizer; default by the model: the thesis's SMC on a scene of
+    /// distance links only, Baumgarte's exact multipliers (α = β =
+    /// [`DEFAULT_BAUMGARTE_RATE`]) on a scene with joints, where the SMC law does work
+    /// (docs/method.md §2.1).
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub stabilizer: Option<StabilizerFile>,
     /// Multiplier solve; default exact Cholesky.
     #[serde(default)]
     pub solver: SolverFile,
@@ -278,14 +293,14 @@ pub struct StabilizerFile {
         skip_serializing_if = "Option::is_none"
     )]
     pub epsilon: Option<f64>,
-    /// Baumgarte damping α [1/s], ≥ 0; required for `"baumgarte"` (no value is canonical).
+    /// Baumgarte damping α [1/s], ≥ 0; default [`DEFAULT_BAUMGARTE_RATE`].
     #[serde(
         default,
         deserialize_with = "present",
         skip_serializing_if = "Option::is_none"
     )]
     pub alpha: Option<f64>,
-    /// Baumgarte stiffness β [1/s], ≥ 0; required for `"baumgarte"`.
+    /// Baumgarte stiffness β [1/s], ≥ 0; default [`DEFAULT_BAUMGARTE_RATE`].
     #[serde(
         default,
         deserialize_with = "present",

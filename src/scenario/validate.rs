@@ -37,7 +37,7 @@ use self::bodies::{model, Ids, Model};
 use self::channels::channels;
 use self::checks::{
     finite, foreign, magnitude, magnitude_vector, non_negative, num, positive, positive_magnitude,
-    required, time, whole_nanos,
+    time, whole_nanos,
 };
 use self::joints::joint_rows;
 pub use self::joints::MAX_JOINTS;
@@ -45,11 +45,11 @@ use self::network::{check_tdma, network};
 use self::partition::partition;
 pub use self::partition::{DEFAULT_EXTRAPOLATE, DEFAULT_LINES_ABOVE, DEFAULT_TANK};
 use super::file::{
-    BodyModelFile, ForceFile, IntegratorFile, MeasurementFile, OutputFile, ScenarioFile,
-    SolverFile, SolverKind, StabilizerFile, StabilizerKind, DEFAULT_CG_MAX_ITERATIONS,
-    DEFAULT_CG_TOLERANCE, DEFAULT_MEASUREMENT_PERIOD, DEFAULT_PCG_MAX_ITERATIONS,
-    DEFAULT_PCG_REFACTOR_EVERY, DEFAULT_PCG_TOLERANCE, DEFAULT_SMC_EPSILON, DEFAULT_SMC_K,
-    DEFAULT_SMC_MU,
+    BodyModelFile, ForceFile, IntegratorFile, MeasurementFile, ModelFile, OutputFile, ScenarioFile,
+    SolverFile, SolverKind, StabilizerFile, StabilizerKind, DEFAULT_BAUMGARTE_RATE,
+    DEFAULT_CG_MAX_ITERATIONS, DEFAULT_CG_TOLERANCE, DEFAULT_MEASUREMENT_PERIOD,
+    DEFAULT_PCG_MAX_ITERATIONS, DEFAULT_PCG_REFACTOR_EVERY, DEFAULT_PCG_TOLERANCE,
+    DEFAULT_SMC_EPSILON, DEFAULT_SMC_K, DEFAULT_SMC_MU,
 };
 use super::model::{
     BodyModel, ForceSpec, Integrator, LoadAt, NetworkSpec, OutputSpec, Scenario, Solver, Stabilizer,
@@ -278,7 +278,10 @@ pub fn validate(file: ScenarioFile) -> Result<Scenario> {
         IntegratorFile::SymplecticEuler => Integrator::SymplecticEuler,
         IntegratorFile::Rk4 => Integrator::Rk4,
     };
-    let stabilizer = stabilizer(&file.stabilizer)?;
+    let stabilizer = match &file.stabilizer {
+        Some(section) => stabilizer(section)?,
+        None => default_stabilizer(&file.model),
+    };
     let solver = solver(&file.solver)?;
 
     let Model {
@@ -455,7 +458,32 @@ fn step_and_duration(dt_secs: f64, duration_secs: f64) -> Result<(SimTime, SimTi
     Ok((dt, duration))
 }
 
-/// The `stabilizer` section, thesis SMC values for any omitted key.
+/// The law of a scenario without a `stabilizer` section: the thesis's SMC on a scene
+/// of distance links, Baumgarte's exact multipliers on a scene with joints.
+///
+/// Why by the model: on a joint the SMC law, which solves for `ż` and leaves the
+/// turning of `J M⁻¹ Jᵀ` to its robustness term, does work. A ball joint held open by
+/// the law's lag carries its reaction pair at two points, a couple that changes the
+/// angular momentum; a heavy top's nutation grows, a conical pendulum diverges within
+/// a second (docs/method.md §2.1 gives the measurements). The thesis's scenes have no
+/// joints and keep its law and their digests.
+fn default_stabilizer(model: &ModelFile) -> Stabilizer {
+    if model.joints.is_empty() {
+        Stabilizer::Smc {
+            mu: DEFAULT_SMC_MU,
+            k: DEFAULT_SMC_K,
+            epsilon: DEFAULT_SMC_EPSILON,
+        }
+    } else {
+        Stabilizer::Baumgarte {
+            alpha: DEFAULT_BAUMGARTE_RATE,
+            beta: DEFAULT_BAUMGARTE_RATE,
+        }
+    }
+}
+
+/// The `stabilizer` section, the thesis's SMC values or Baumgarte's defaults for any
+/// omitted key.
 fn stabilizer(s: &StabilizerFile) -> Result<Stabilizer> {
     match s.kind {
         StabilizerKind::Smc => {
@@ -480,12 +508,8 @@ fn stabilizer(s: &StabilizerFile) -> Result<Stabilizer> {
                     return Err(foreign(&format!("stabilizer.{key}"), "baumgarte"));
                 }
             }
-            let alpha = s
-                .alpha
-                .ok_or_else(|| required("stabilizer.alpha", "baumgarte"))?;
-            let beta = s
-                .beta
-                .ok_or_else(|| required("stabilizer.beta", "baumgarte"))?;
+            let alpha = s.alpha.unwrap_or(DEFAULT_BAUMGARTE_RATE);
+            let beta = s.beta.unwrap_or(DEFAULT_BAUMGARTE_RATE);
             Ok(Stabilizer::Baumgarte {
                 alpha: magnitude("stabilizer.alpha", non_negative("stabilizer.alpha", alpha)?)?,
                 beta: magnitude("stabilizer.beta", non_negative("stabilizer.beta", beta)?)?,

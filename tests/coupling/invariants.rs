@@ -472,3 +472,70 @@ fn the_momentum_the_brake_takes_is_given_back_and_its_energy_stays_removed() {
         braked.norm()
     );
 }
+
+/// The free ring of [`a_free_spinning_ring_keeps_its_angular_momentum_and_energy`], a
+/// little out of plane so its links also move along z, on 3 nodes under `coupling` at
+/// τ, with uniform `gravity`.
+fn falling_ring(coupling: &str, tau: f64, gravity: Option<[f64; 3]>) -> Value {
+    let n = 12;
+    let radius = 1.8 / (2.0 * (std::f64::consts::PI / n as f64).sin());
+    let (mut bodies, mut links) = (Vec::new(), Vec::new());
+    for k in 0..n {
+        let a = 2.0 * std::f64::consts::PI * k as f64 / n as f64;
+        bodies.push(
+            json!({"id": k + 1, "mass": 1.0 + 0.25 * (k % 3) as f64, "size": 0.2,
+            "position": [radius * a.cos(), radius * a.sin(), 0.0],
+            "velocity": [-2.0 * radius * a.sin(), 2.0 * radius * a.cos(), 0.8 * (2.0 * a).sin()]}),
+        );
+        links.push(json!({"a": k + 1, "b": (k + 1) % n + 1, "length": 1.8}));
+    }
+    let mut v = json!({"name": "ring", "seed": 1, "duration": 3.0, "dt": 0.001,
+        "model": {"bodies": bodies, "links": links},
+        "partition": {"nodes": [[1, 2, 3, 4], [5, 6, 7, 8], [9, 10, 11, 12]]},
+        "channels": [{"name": "all", "tau": tau}]});
+    if coupling != "default" {
+        v["partition"]["coupling"] = json!(coupling);
+    }
+    if let Some(g) = gravity {
+        v["model"]["gravity"] = json!(g);
+    }
+    v
+}
+
+#[test]
+fn uniform_gravity_changes_no_relative_motion_under_any_scheme() {
+    // A uniform field accelerates every body alike: in the frame falling with the
+    // centre of mass nothing changes. Every reference the coupling keeps (the centre
+    // of mass's velocity its lines and energy books measure against) must fall too;
+    // left out, the brake saw the fall as border power and took energy.
+    for coupling in ["default", "passive", "predict", "tlm"] {
+        for tau in [0.005, 0.02] {
+            let (a, ea) = run(&falling_ring(coupling, tau, None));
+            let (b, eb) = run(&falling_ring(coupling, tau, Some([0.0, 0.0, -9.81])));
+            assert!(
+                ea.is_none() && eb.is_none(),
+                "{coupling}, τ = {tau}: {ea:?} {eb:?}"
+            );
+            let worst = a
+                .relative
+                .iter()
+                .zip(&b.relative)
+                .flat_map(|(x, y)| x.iter().zip(y).map(|(p, q)| (p - q).norm()))
+                .fold(0.0, f64::max);
+            // Both ways: the ring did fall (44 m in 3 s) and did move relative to its
+            // centre (it spins), so agreement is not two frozen runs.
+            let fell = a.absolute.last().unwrap()[0].z - b.absolute.last().unwrap()[0].z;
+            eprintln!("{coupling}, τ = {tau}: relative motion with and without gravity within {worst:.3e} m (fell {fell:.2} m)");
+            assert!(fell > 40.0, "{coupling}, τ = {tau}: fell {fell} m");
+            // `tlm` still differs (2.4e-5 m at 5 ms, 1.2e-4 m at 20 ms: its far anchors
+            // now fall between samples, which took 5 ms from 1.5e-4 m, but some part of
+            // the wave model still sees the fall; open, docs/method.md §3.1); held to
+            // what it reaches so it cannot grow back.
+            let bound = if coupling == "tlm" { 2e-4 } else { 1e-9 };
+            assert!(
+                worst <= bound,
+                "{coupling}, τ = {tau}: relative positions differ by {worst:e} m"
+            );
+        }
+    }
+}

@@ -110,7 +110,7 @@ fn a_hinge_holds_its_axis_and_swings_like_the_pendulum() {
 
     // The axis under the SMC law with the thesis's parameters: held within ε.
     let mut v = pendulum("hinge", l, 0.5, 0.2, 5.0);
-    v.as_object_mut().unwrap().remove("stabilizer");
+    v["stabilizer"] = json!({"kind": "smc"});
     v["model"]["bodies"][0]["angular_velocity"] = json!([0.3, 1.0, -0.2]);
     let s = scenario(v);
     let epsilon = match s.stabilizer {
@@ -276,11 +276,20 @@ fn a_double_pendulum_keeps_its_energy() {
 }
 
 /// Ten 1 kg bodies hanging in a chain of ball joints from a world pivot, released at
-/// rest on the joints: the SMC law (the thesis's parameters) brings the multipliers
-/// from zero to the static forces, each joint carrying the weight of every body below
-/// it.
+/// rest on the joints: under the SMC law (the thesis's parameters) the multipliers
+/// grow from zero to the static forces, and under the default law (exact multipliers)
+/// they are the static forces from the first step; each joint carries the weight of
+/// every body below it.
 #[test]
 fn a_hanging_chain_settles_with_its_joints_carrying_the_weight_below() {
+    for law in [json!({"kind": "smc"}), Value::Null] {
+        hanging_chain_settles(law);
+    }
+}
+
+/// [`a_hanging_chain_settles_with_its_joints_carrying_the_weight_below`] under `law`
+/// (null: the default).
+fn hanging_chain_settles(law: Value) {
     let n = 10;
     let bodies: Vec<Value> = (0..n)
         .map(
@@ -291,25 +300,35 @@ fn a_hanging_chain_settles_with_its_joints_carrying_the_weight_below() {
     for i in 1..n {
         joints.push(json!({"type": "ball", "a": i, "b": i + 1, "at": [0, 0, -(i as f64)]}));
     }
-    let s = scenario(json!({
+    let mut v = json!({
         "name": "chain", "seed": 1, "duration": 10.0, "dt": 0.001, "integrator": "rk4",
         "model": {"gravity": [0, 0, -G], "bodies": bodies, "joints": joints}
-    }));
-    let end = simulate(&s, |_, _, _| {});
+    });
+    if !law.is_null() {
+        v["stabilizer"] = law.clone();
+    }
+    let s = scenario(v);
+    // The rows' forces at the last step (a row's tension is −z).
+    let mut tension = vec![0.0; 3 * n];
+    let end = simulate(&s, |_, sys, st| {
+        for (row, f) in tension.iter_mut().enumerate() {
+            *f = sys.tension(st, row);
+        }
+    });
     for j in 0..n {
         // Joint j's vertical row is row 2 of its three; it pulls its upper body up.
-        let z = end.z[3 * j + 2];
+        let z = tension[3 * j + 2];
         let below = (n - j) as f64 * G;
         assert!(
             ((z.abs() - below) / below).abs() < 1e-6,
-            "joint {}: {z} N, the weight below is {below} N",
+            "{law}: joint {}: {z} N, the weight below is {below} N",
             j + 1
         );
     }
     for i in 0..n {
         assert!(
             end.v[i].norm() < 1e-6,
-            "body {} still moves at {:?}",
+            "{law}: body {} still moves at {:?}",
             i + 1,
             end.v[i]
         );

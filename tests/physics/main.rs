@@ -10,6 +10,7 @@ use serde_json::{json, Value};
 
 mod joints;
 mod loads;
+mod mechanisms;
 
 fn scenario(v: Value) -> Scenario {
     parse_str(&v.to_string(), "<test>").unwrap_or_else(|e| panic!("scenario: {e}"))

@@ -11,7 +11,7 @@ use dsmcosim::scenario::file::{
     OutputFile, PartitionFile, ScenarioFile, SolverFile, SolverKind, StabilizerFile,
     StabilizerKind,
 };
-use dsmcosim::scenario::model::Solver;
+use dsmcosim::scenario::model::{Solver, Stabilizer};
 use dsmcosim::scenario::validate::{parse_file, validate};
 use dsmcosim::scenario::{load, parse_str};
 use dsmcosim::Error;
@@ -317,7 +317,10 @@ fn non_finite_values_built_in_code_are_rejected() {
     f.model.links.as_mut().unwrap()[1].anchor_b[0] = f64::NAN;
     invalid_file(f, "model.links[1].anchor_b[0]", "NaN");
     let mut f = file();
-    f.stabilizer.epsilon = Some(f64::INFINITY);
+    f.stabilizer = Some(StabilizerFile {
+        epsilon: Some(f64::INFINITY),
+        ..StabilizerFile::default()
+    });
     invalid_file(f, "stabilizer.epsilon", "inf");
 }
 
@@ -573,7 +576,9 @@ fn stabilizer_and_solver_sections_are_checked() {
     assert!(parse_str(&baumgarte(json!(0), json!(0)), "b.json").is_ok());
     invalid(baumgarte(json!(-1), json!(5)), "stabilizer.alpha", "must be ≥ 0 (got -1)");
     invalid(baumgarte(json!(5), json!(-2)), "stabilizer.beta", "must be ≥ 0 (got -2)");
-    invalid(set("/stabilizer", json!({"kind": "baumgarte", "beta": 1})), "stabilizer.alpha", "required");
+    // An omitted α or β takes the default of a jointed scene's law, 20 /s.
+    let one = parse_str(&set("/stabilizer", json!({"kind": "baumgarte", "beta": 1})), "b.json").unwrap();
+    assert_eq!(one.stabilizer, Stabilizer::Baumgarte { alpha: 20.0, beta: 1.0 });
     invalid(set("/stabilizer", json!({"kind": "baumgarte", "alpha": 1, "beta": 1, "mu": 0.1})), "stabilizer.mu", "not a key of kind \"baumgarte\"");
     invalid(set("/stabilizer/alpha", json!(1)), "stabilizer.alpha", "not a key of kind \"smc\"");
     invalid(set("/solver/max_iterations", json!(0)), "solver.max_iterations", "must be ≥ 1 (got 0)");
@@ -1022,7 +1027,7 @@ fn scenario() -> impl Strategy<Value = ScenarioFile> {
                 duration: secs(dt_ns * steps),
                 dt: secs(dt_ns),
                 integrator,
-                stabilizer,
+                stabilizer: Some(stabilizer),
                 solver,
                 body_model,
                 model: ModelFile {

@@ -159,22 +159,53 @@ impl Ordered {
         x.iter().all(|v| v.is_finite())
     }
 
-    /// Factorizes the matrix with these `values` into the stored factor. `false` if a
-    /// pivot (before its square root) is at or below `min_pivot` or faer finds `A` not
-    /// positive definite.
+    /// Factorizes the matrix with these `values` into the stored factor. `false` if
+    /// `A` is not a mechanism's (a non-finite value, or faer finds a clearly negative
+    /// pivot).
+    ///
+    /// A pivot (before its square root) at or below `min_pivot` is a row that depends
+    /// on the rows eliminated before it (a redundant constraint, or a mechanism at a
+    /// singular position): the factorization is redone with faer's dynamic
+    /// regularization, which replaces each such pivot by `A`'s largest diagonal entry.
+    /// The dependent row's column of the factor is then its round-off residual over a
+    /// pivot of `A`'s own scale, so it leans on no later row and its multiplier is
+    /// round-off: the dense path's dropped row (`solver::cholesky_column`), to working
+    /// precision. A matrix without such a pivot gets the plain factorization's bits.
     pub(super) fn factorize(
+        &mut self,
+        pattern: (usize, &[usize], &[usize]),
+        values: &[f64],
+        min_pivot: f64,
+    ) -> bool {
+        if self.factorize_with(pattern, values, min_pivot, None) {
+            return true;
+        }
+        if !values.iter().all(|v| v.is_finite()) {
+            return false;
+        }
+        let (n, col_ptr, _) = pattern;
+        // The diagonal entry is each column's first.
+        let max_diag = col_ptr[..n].iter().map(|&i| values[i]).fold(0.0, f64::max);
+        self.factorize_with(pattern, values, 0.0, Some((min_pivot, max_diag)))
+    }
+
+    /// One numeric factorization; `drop` = `(threshold, replacement)` regularizes the
+    /// pivots at or below the threshold.
+    fn factorize_with(
         &mut self,
         (n, col_ptr, row_idx): (usize, &[usize], &[usize]),
         values: &[f64],
         min_pivot: f64,
+        drop: Option<(f64, f64)>,
     ) -> bool {
         let a = SparseColMatRef::new(
             SymbolicSparseColMatRef::new_checked(n, n, col_ptr, None, row_idx),
             values,
         );
+        let (epsilon, delta) = drop.unwrap_or((0.0, 0.0));
         let regularization = LltRegularization {
-            dynamic_regularization_delta: 0.0,
-            dynamic_regularization_epsilon: 0.0,
+            dynamic_regularization_delta: delta,
+            dynamic_regularization_epsilon: epsilon,
         };
         let factored = self
             .symbolic
