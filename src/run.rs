@@ -55,6 +55,9 @@ pub struct Outcome {
     /// The SMC boundary layer's account (`None` under Baumgarte): how many steps some
     /// link's `|w|` spent beyond `ε`, and the worst.
     pub boundary_layer: Option<crate::trace::drift::LayerWatch>,
+    /// The work the law did on the joints' rows (`None` without joints): an ideal
+    /// joint does none.
+    pub joint_work: Option<crate::trace::joint_work::JointWork>,
     /// Channels whose requested delays the network did not realize ([`unserved`]).
     pub unserved: Vec<unserved::Unserved>,
 }
@@ -228,6 +231,7 @@ fn finish(
         messages: world.messages(),
         events: world.events(),
         boundary_layer: recorder.boundary_layer().cloned(),
+        joint_work: recorder.joint_work().cloned(),
         unserved: unserved::unserved(&world),
     };
     write_epochs(out, &world, &experiment)?;
@@ -507,6 +511,9 @@ fn write_summary(out: &Path, run: &Ran) -> Result<()> {
     }
     if let Some(layer) = recorder.boundary_layer() {
         summary["boundary_layer"] = layer.summary();
+    }
+    if let Some(work) = recorder.joint_work() {
+        summary["joint_work"] = work.summary();
     }
     // Always present on a partitioned run, empty when every request ran as asked.
     if scenario.partition.is_some() || !scenario.channels.is_empty() {

@@ -6,6 +6,7 @@
 pub mod compare;
 pub mod digest;
 pub mod drift;
+pub mod joint_work;
 pub mod network_log;
 pub mod plot_samples;
 pub mod recorder;

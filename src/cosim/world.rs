@@ -11,13 +11,14 @@ use crate::control::CostMeter;
 use crate::error::{Divergence, Error, Place, Result};
 use crate::kernel::{EventClass, Kernel, SimTime};
 use crate::multibody::invariants::Invariants;
+use crate::multibody::{State, System};
 use crate::network::route::Route;
 use crate::network::tdma::{tdma_node, CycleReport, TdmaError};
 use crate::network::{Channel, Message, Payload};
 use crate::partition::line::LineSet;
 use crate::partition::{Layout, Node};
 use crate::scenario::model::{
-    BodyModel, BodySpec, DataKind, NetworkSpec, Scenario, SignalSink, SignalSource,
+    BodyModel, BodySpec, DataKind, NetworkSpec, Scenario, SignalSink, SignalSource, Stabilizer,
 };
 
 /// The values of one step, as observers (trace recorder, digest) see them: the whole
@@ -254,9 +255,21 @@ impl CoSim {
         // The periods each channel starts at (on TDMA what the initial list achieves).
         let periods: Vec<SimTime> = channels.iter().map(|c| c.tau).collect();
         let lines = LineSet::new(scenario, &layout.routes, &periods);
-        let nodes: Vec<Node> = (0..layout.nodes)
+        let mut nodes: Vec<Node> = (0..layout.nodes)
             .map(|n| Node::new(scenario, &layout, n, &lines))
             .collect();
+        // Under Baumgarte every node starts from the whole model's multipliers at t = 0
+        // (see Node::start_consistent). A failed evaluation here is the first step's,
+        // reported there.
+        if layout.nodes > 1 && matches!(scenario.stabilizer, Stabilizer::Baumgarte { .. }) {
+            let initial = State::initial(scenario);
+            let mut whole = System::new(scenario);
+            if whole.begin_step(SimTime::ZERO, &initial).is_ok() {
+                for node in &mut nodes {
+                    node.start_consistent(&whole, &initial, scenario);
+                }
+            }
+        }
         // Each line's two ends, found once: (node, end index) at `a` and at `b`.
         let line_ends = (0..scenario.links.len())
             .map(|l| {

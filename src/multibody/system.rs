@@ -380,6 +380,24 @@ impl System {
         }
     }
 
+    /// Row `l`'s multiplier [N] in `state` as the last evaluation left it (SMC: the
+    /// state's `z`; Baumgarte: the last evaluation's algebraic one).
+    pub fn multiplier(&self, state: &super::State, l: usize) -> f64 {
+        match self.stabilizer {
+            Stabilizer::Smc { .. } => state.z[l],
+            Stabilizer::Baumgarte { .. } => self.ws.z_alg[l],
+        }
+    }
+
+    /// Under Baumgarte, sets the multipliers the next samples read before an
+    /// evaluation of this system's own (one per row); under SMC they are state and this
+    /// does nothing.
+    pub fn set_multipliers(&mut self, z: &[f64]) {
+        if matches!(self.stabilizer, Stabilizer::Baumgarte { .. }) {
+            self.ws.z_alg.copy_from_slice(z);
+        }
+    }
+
     /// Sets link `l`'s SMC surface parameter μ [s] (the others keep the stabilizer's).
     pub fn set_link_mu(&mut self, l: usize, mu: f64) {
         if let Stabilizer::Smc { mu: base, .. } = self.stabilizer {

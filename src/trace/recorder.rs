@@ -13,6 +13,7 @@ use crate::report::Series;
 use crate::scenario::model::Scenario;
 
 use super::drift::{undriven_stretches, InvariantLog, LayerWatch};
+use super::joint_work::JointWork;
 use super::network_log::NetworkLog;
 use super::plot_samples::PlotSamples;
 use super::Digest;
@@ -75,6 +76,9 @@ pub struct Recorder {
     invariants: InvariantLog,
     /// The SMC boundary layer's account (SMC runs built with [`Recorder::for_scenario`]).
     layer: Option<LayerWatch>,
+    /// The work the law does on the joints' rows (scenes with joints built with
+    /// [`Recorder::for_scenario`]).
+    joint_work: Option<JointWork>,
     /// The names of the FMU outputs recorded per step (`<fmu>.<variable>`), trace.csv's
     /// last columns; empty without FMUs.
     #[serde(default)]
@@ -140,6 +144,7 @@ impl Recorder {
         }
         r.invariants = InvariantLog::new(&undriven_stretches(scenario));
         r.layer = LayerWatch::new(scenario);
+        r.joint_work = JointWork::new(scenario);
         r.signal_names = scenario
             .fmus
             .iter()
@@ -195,6 +200,7 @@ impl Recorder {
             rotation: false,
             invariants: InvariantLog::new(&[]),
             layer: None,
+            joint_work: None,
             signal_names: Vec::new(),
             signal_plots: no_plot_samples(),
         }
@@ -266,6 +272,9 @@ impl Recorder {
         }
         if let Some(layer) = &mut self.layer {
             layer.record(s.time, s.max_w);
+        }
+        if let Some(work) = &mut self.joint_work {
+            work.record(s.time, s.f, s.w, s.invariants().kinetic_energy);
         }
         let row = s.step.is_multiple_of(self.decimation) || s.last;
         // The invariants cost a pass over the bodies: computed on the rows the trace
@@ -386,6 +395,12 @@ impl Recorder {
     /// built with [`Recorder::for_scenario`].
     pub fn boundary_layer(&self) -> Option<&LayerWatch> {
         self.layer.as_ref()
+    }
+
+    /// The work the law did on the joints' rows; `None` on a scene without joints or
+    /// for a recorder not built with [`Recorder::for_scenario`].
+    pub fn joint_work(&self) -> Option<&JointWork> {
+        self.joint_work.as_ref()
     }
 
     /// Keeps a copy of every trace line from now on (the header included), for

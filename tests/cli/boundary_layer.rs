@@ -80,3 +80,52 @@ fn a_run_inside_the_boundary_layer_reports_no_step_outside() {
     assert!(o.status.success(), "{}", said(&o));
     assert_eq!(summary(&out).get("boundary_layer"), None::<&Value>);
 }
+
+/// A bob on its steady cone, 1 m below a world ball joint, for 0.3 s, under `law`
+/// (null: the default of a scene with joints).
+fn cone(law: Value) -> Value {
+    let (g, l, theta) = (9.81f64, 1.0f64, 30f64.to_radians());
+    let omega = (g / (l * theta.cos())).sqrt();
+    let mut v = json!({
+        "name": "cone", "seed": 1, "duration": 0.3, "dt": 0.001, "integrator": "rk4",
+        "model": {"gravity": [0, 0, -g],
+                  "bodies": [{"id": 1, "mass": 1.0, "size": 0.1,
+                              "position": [l * theta.sin(), 0, -l * theta.cos()],
+                              "velocity": [0, omega * l * theta.sin(), 0],
+                              "angular_velocity": [0, 0, omega]}],
+                  "joints": [{"type": "ball", "a": 1, "at": [0, 0, 0]}]}
+    });
+    if !law.is_null() {
+        v["stabilizer"] = law;
+    }
+    v
+}
+
+/// The work a law does on a joint is measured, reported in summary.json's
+/// `joint_work`, and named on stderr when it is a visible share of the mechanism's
+/// energy: the SMC law by name does some on a conical pendulum; the default does none.
+#[test]
+fn a_law_that_does_work_on_a_joint_says_so() {
+    let dir = scratch("joint_work_out");
+    let (o, out) = run_in(&dir, &cone(json!({"kind": "smc"})));
+    assert!(o.status.success(), "{}", said(&o));
+    let work = &summary(&out)["joint_work"];
+    let share = work["share_of_kinetic_energy"].as_f64().expect("share");
+    assert!(share > 0.01, "{work}");
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("warning: the joints' forces did "),
+        "{}",
+        said(&o)
+    );
+    let dir = scratch("joint_work_default_out");
+    let (o, out) = run_in(&dir, &cone(Value::Null));
+    assert!(o.status.success(), "{}", said(&o));
+    let work = &summary(&out)["joint_work"];
+    // Round-off: the joint stays closed to the integrator's truncation.
+    assert!(work["net"].as_f64().expect("net").abs() < 1e-6, "{work}");
+    assert!(
+        !String::from_utf8_lossy(&o.stderr).contains("the joints' forces did"),
+        "{}",
+        said(&o)
+    );
+}
