@@ -31,6 +31,9 @@ impl System {
         let mut k1 = std::mem::replace(&mut self.k[0], empty_rates());
         let r = self.rates(t, state, &mut k1);
         self.k[0] = k1;
+        if r.is_ok() {
+            self.note_step_multipliers(t);
+        }
         r
     }
 
@@ -110,6 +113,7 @@ impl System {
                 let mut k1 = std::mem::replace(&mut sys.k[0], empty_rates());
                 sys.rates_from_solution(state, &mut k1);
                 sys.k[0] = k1;
+                sys.note_step_multipliers(t);
             }
             if let Some((i, e)) = first_solve_error {
                 return Err((base + i, EvalError::Solve(e)));

@@ -493,10 +493,10 @@ fn platform_and_rotor(split: Option<f64>) -> Value {
 /// The hinge between the platform and its rotor split over two nodes keeps the
 /// invariants as the monolithic run does (momentum within 1 kg·m/s, |L| within 3
 /// points, kinetic energy within −5/+2 points) and its axes together (within 1e-2 rad)
-/// at 1 ms. At 5 ms the axes hold (7e-3 rad) but |L| drifts 12.5 %, and at 20 ms the
-/// axes come 0.36 rad apart: a border joint's torques reach the far body late, and no
-/// account gives the angular momentum back as the linear one is given back (method
-/// §2.1): printed, open.
+/// at 1 and 5 ms. (The hinge's alignment rows turn with the rotor's spin and their
+/// multipliers change to keep the couple steady: sent without the multipliers' slope,
+/// the couple the rotor felt turned at its spin, and |L| drifted 12.5 % at 5 ms.) At
+/// 20 ms the axes come 0.5 rad apart and |L| drifts 43 %: printed, open (method §2.1).
 #[test]
 fn a_hinge_across_a_partition_keeps_its_axes_and_the_invariants() {
     let (p0, l0, e0) = drifts(&platform_and_rotor(None));
@@ -526,7 +526,7 @@ fn a_hinge_across_a_partition_keeps_its_axes_and_the_invariants() {
             100.0 * l0,
             100.0 * e0
         );
-        if tau <= 0.001 {
+        if tau <= 0.005 {
             assert!(axes.0 <= 1e-2, "τ = {tau}: axes {} rad apart", axes.0);
             assert!(p <= 1.0, "τ = {tau}: |ΔP| {p}");
             assert!((l - l0).abs() <= 0.03, "τ = {tau}: |ΔL|/|L| {l} vs {l0}");
