@@ -514,7 +514,14 @@ fn the_coupling_study_measures_a_force_free_mechanism_from_its_start() {
     names.sort();
     assert_eq!(
         names,
-        ["chain10", "grid16_mass_ratio", "pendulum2", "ring12"]
+        [
+            "chain10",
+            "free_chain5",
+            "grid16_mass_ratio",
+            "pendulum2",
+            "platform_rotor",
+            "ring12"
+        ]
     );
     let out = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("target/test-scratch/coupling_ring");
