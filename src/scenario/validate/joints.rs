@@ -31,8 +31,32 @@ pub(super) fn joint_rows(
         ));
     }
     let mut rows = Vec::new();
+    // Each pair of sides (the world as `None`) and point already joined, and by which
+    // joint: a second joint there repeats the first's offset rows.
+    let mut seen = std::collections::BTreeMap::new();
     for (j, file) in joints.iter().enumerate() {
-        rows.extend(joint(&format!("model.joints[{j}]"), j, file, ids, bodies)?);
+        let path = format!("model.joints[{j}]");
+        rows.extend(joint(&path, j, file, ids, bodies)?);
+        let (lo, hi) = match file.b {
+            Some(b) => (Some(file.a.min(b)), Some(file.a.max(b))),
+            None => (None, Some(file.a)),
+        };
+        let key = (lo, hi, file.at.map(f64::to_bits));
+        if let Some(first) = seen.insert(key, j) {
+            let between = match file.b {
+                Some(b) => format!("bodies {} and {b}", file.a),
+                None => format!("body {} and the world", file.a),
+            };
+            return Err(Error::invalid(
+                path,
+                format!(
+                    "joins {between} at {} as model.joints[{first}] does; a constraint \
+                     given twice only repeats rows (remove one, or keep the joint with more \
+                     rows)",
+                    vec_str(&file.at)
+                ),
+            ));
+        }
     }
     Ok(rows)
 }
