@@ -173,7 +173,9 @@ impl Watch {
             momenta_end: [Vector3::repeat(f64::NAN); 2],
             max_w: 0.0,
             gravity: s.gravity,
-            external: s.gravity.is_some() || s.links.iter().any(|l| l.world),
+            external: s.gravity.is_some()
+                || s.links.iter().any(|l| l.world)
+                || s.springs.iter().any(|sp| sp.b.is_none()),
         }
     }
 }

@@ -11,6 +11,7 @@ pub mod dynamics;
 pub mod integrator;
 pub mod invariants;
 pub mod solver;
+pub mod spring;
 pub mod state;
 pub mod system;
 

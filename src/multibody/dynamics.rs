@@ -2,8 +2,8 @@
 //!
 //! Stages, in this order because each needs the previous one's results:
 //! 1. body frames: world inertia `R I Rᵀ` and its inverse (rigid path);
-//! 2. body loads: external forces at `t`, the held extra forces, gyroscopic torque
-//!    `−ω × (I ω)`;
+//! 2. body loads: external forces at `t`, springs, the held extra forces, gyroscopic
+//!    torque `−ω × (I ω)`;
 //! 3. link kinematics: `w = |P_a − P_b| − L`, `n`, `ẇ = J v`, `J̇ v`; under SMC the
 //!    current multipliers' forces `Jᵀ z` are added to the loads;
 //! 4. accelerations `M⁻¹ (loads)` and `ẅ = J a + J̇ v`;
@@ -150,6 +150,19 @@ impl System {
                     let (force, torque) = f.load(t, &rotation);
                     self.ws.force[f.body] += force;
                     self.ws.torque[f.body] += torque;
+                }
+            }
+        }
+        for s in &self.springs {
+            let [fa, ta, fb, tb] = super::spring::loads(s, state, self.rigid);
+            self.ws.force[s.a] += fa;
+            if self.rigid {
+                self.ws.torque[s.a] += ta;
+            }
+            if let Some(b) = s.b {
+                self.ws.force[b] += fb;
+                if self.rigid {
+                    self.ws.torque[b] += tb;
                 }
             }
         }

@@ -5,7 +5,9 @@ use nalgebra::{Matrix3, Vector3};
 use super::solver::{Geometry, JsSolver, MassData, SolveError};
 use super::state::Rates;
 use crate::kernel::SimTime;
-use crate::scenario::model::{BodyModel, ForceSpec, Integrator, RowKind, Scenario, Stabilizer};
+use crate::scenario::model::{
+    BodyModel, ForceSpec, Integrator, RowKind, Scenario, SpringSpec, Stabilizer,
+};
 
 /// One distance link, with body indices resolved.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -37,6 +39,8 @@ pub struct System {
     pub(crate) inertia: Vec<Vector3<f64>>,
     pub(crate) links: Vec<Link>,
     pub(crate) forces: Vec<ForceSpec>,
+    /// Spring-dampers (local body indices); empty: none, and no arithmetic.
+    pub(crate) springs: Vec<SpringSpec>,
     /// Uniform gravity [m/s²] on every movable body (`None`: none).
     pub(crate) gravity: Option<Vector3<f64>>,
     pub(crate) stabilizer: Stabilizer,
@@ -211,6 +215,7 @@ impl System {
             inertia,
             links,
             forces: scenario.forces.clone(),
+            springs: scenario.springs.clone(),
             gravity: scenario.gravity,
             stabilizer: scenario.stabilizer,
             link_mu: Vec::new(),
@@ -594,6 +599,28 @@ impl System {
         }
         self.z_step.z.clone_from(&self.ws.z_alg);
         self.z_step.at = Some(t);
+    }
+
+    /// The force [N] and torque [N·m] the springs put on body `body` in `state`.
+    pub fn spring_load_on(
+        &self,
+        state: &super::State,
+        body: usize,
+    ) -> (Vector3<f64>, Vector3<f64>) {
+        let mut load = (Vector3::zeros(), Vector3::zeros());
+        for s in &self.springs {
+            if s.a == body || s.b == Some(body) {
+                let [fa, ta, fb, tb] = super::spring::loads(s, state, self.rigid);
+                if s.a == body {
+                    load.0 += fa;
+                    load.1 += ta;
+                } else {
+                    load.0 += fb;
+                    load.1 += tb;
+                }
+            }
+        }
+        load
     }
 
     /// Iterations used by the last multiplier solve (0 for Cholesky).

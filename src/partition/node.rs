@@ -163,6 +163,19 @@ impl Node {
                 f
             })
             .collect();
+        // A spring's two bodies share a node (validation): its node computes it, on
+        // its own bodies only (a ghost feels it through its owner's load).
+        sub.springs = scenario
+            .springs
+            .iter()
+            .filter(|s| local_body.get(&s.a).is_some_and(|&l| l < owned))
+            .map(|s| {
+                let mut s = s.clone();
+                s.a = local_body[&s.a];
+                s.b = s.b.map(|b| local_body[&b]);
+                s
+            })
+            .collect();
         sub.partition = None;
         sub.channels.clear();
         let mut system = System::new(&sub);
@@ -343,6 +356,9 @@ impl Node {
                     })
                     .collect();
                 let (mut force, mut torque) = load_on(&others, g);
+                let (fs, ts) = whole.spring_load_on(initial, g);
+                force += fs;
+                torque += ts;
                 let q = initial
                     .q
                     .get(g)
@@ -424,6 +440,11 @@ impl Node {
                 torque_rate += tr;
             }
         }
+        // The springs on it (held over the sample's age: a spring's force is the
+        // state's, which the receiver's ghost carries forward).
+        let (f, tq) = self.system.spring_load_on(&self.state, i);
+        force += f;
+        torque += tq;
         for &l in &self.incident[i] {
             if rates {
                 let [f, tq, fr, tr] = self.system.link_load_and_rate_on(&self.state, l, i);

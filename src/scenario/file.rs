@@ -420,6 +420,47 @@ pub struct ModelFile {
     /// Joints turn their bodies: they need rigid bodies (`auto` chooses them).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub joints: Vec<JointFile>,
+    /// Linear spring-dampers between two anchors, or an anchor and a world point, in
+    /// file order; default none. A force element, not a constraint: it adds no row.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub springs: Vec<SpringFile>,
+}
+
+/// One entry of `model.springs`: the force `−(k (d − L) + c ḋ) n` on `a`'s anchor and
+/// its opposite on `b`'s, `d` the anchors' distance, `n` the unit vector from `b`'s
+/// anchor to `a`'s.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SpringFile {
+    /// Id of body `a`.
+    pub a: u32,
+    /// Id of body `b`; without it the spring holds `a` to the world point `anchor_b`.
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub b: Option<u32>,
+    /// Anchor on body `a`, body frame [m]; default the body centre.
+    #[serde(default)]
+    pub anchor_a: [f64; 3],
+    /// Anchor on body `b`, body frame [m] (default its centre); without `b`, the fixed
+    /// world point [m] (default the origin).
+    #[serde(default)]
+    pub anchor_b: [f64; 3],
+    /// Stiffness k [N/m], ≥ 0; required.
+    pub stiffness: f64,
+    /// Damping c [N·s/m], ≥ 0; default 0.
+    #[serde(default)]
+    pub damping: f64,
+    /// Rest length L [m], ≥ 0; default the anchors' distance at t = 0 (the spring
+    /// starts unloaded).
+    #[serde(
+        default,
+        deserialize_with = "present",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub length: Option<f64>,
 }
 
 /// A joint type.

@@ -685,6 +685,27 @@ pub struct ControllerSpec {
     pub landscape: bool,
 }
 
+/// A linear spring-damper (`model.springs`): the force `−(k (d − L) + c ḋ) n` on `a`'s
+/// anchor and its opposite on `b`'s (or on the world), `d` the anchors' distance and
+/// `n` the unit vector from `b`'s anchor to `a`'s. A force element: no constraint row.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SpringSpec {
+    /// Body `a` (index into the bodies).
+    pub a: usize,
+    /// Body `b`, or `None` for a fixed world point.
+    pub b: Option<usize>,
+    /// Anchor on `a`, body frame [m].
+    pub anchor_a: Vector3<f64>,
+    /// Anchor on `b`, body frame [m]; the world point [m] without `b`.
+    pub anchor_b: Vector3<f64>,
+    /// Stiffness k [N/m].
+    pub stiffness: f64,
+    /// Damping c [N·s/m].
+    pub damping: f64,
+    /// Rest length L [m].
+    pub length: f64,
+}
+
 /// A validated scenario.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Scenario {
@@ -715,6 +736,8 @@ pub struct Scenario {
     /// Uniform gravity [m/s²] acting on every movable body; `None` = none (the thesis
     /// scenes: no arithmetic is added, so their bits stay).
     pub gravity: Option<Vector3<f64>>,
+    /// Spring-dampers between bodies, or a body and a world point; empty: none.
+    pub springs: Vec<SpringSpec>,
     /// A run stops with a divergence error when any `|w|` exceeds this [m].
     pub max_violation: f64,
     /// Length T of a cost measurement window.

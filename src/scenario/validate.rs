@@ -27,10 +27,12 @@ mod joints;
 mod network;
 mod partition;
 mod schedule;
+mod springs;
 
 use std::collections::BTreeMap;
 use std::path::Path;
 
+use nalgebra::Vector3;
 use serde_json::error::Category;
 
 use self::bodies::{model, Ids, Model};
@@ -306,6 +308,19 @@ pub fn validate(file: ScenarioFile) -> Result<Scenario> {
         body_model = BodyModel::Rigid;
         links.extend(joint_rows(&file.model.joints, &ids, &bodies)?);
     }
+    let springs = springs::springs(&file.model.springs, &ids, &bodies)?;
+    if let Some(i) = springs.iter().position(|s| {
+        s.anchor_a != Vector3::zeros() || (s.b.is_some() && s.anchor_b != Vector3::zeros())
+    }) {
+        if file.body_model == BodyModelFile::PointMass {
+            return Err(Error::invalid(
+                format!("model.springs[{i}]"),
+                "an anchor off a body's centre turns the body: it needs body_model \
+                 \"rigid\" or \"auto\" (got \"point_mass\")",
+            ));
+        }
+        body_model = BodyModel::Rigid;
+    }
     let mut forces = file
         .forces
         .iter()
@@ -332,6 +347,25 @@ pub fn validate(file: ScenarioFile) -> Result<Scenario> {
         )?),
         None => None,
     };
+    // A spring's force needs both its ends' states every step: it lives on one node.
+    if let Some(p) = &partition {
+        for (i, s) in springs.iter().enumerate() {
+            if let Some(b) = s.b.filter(|&b| p.node_of[b] != p.node_of[s.a]) {
+                return Err(Error::invalid(
+                    format!("model.springs[{i}]"),
+                    format!(
+                        "joins body {} on node {} to body {} on node {}: a spring across \
+                         a partition border is not supported (put both bodies on one node, \
+                         or join them by a link or joint)",
+                        bodies[s.a].id,
+                        p.node_of[s.a] + 1,
+                        bodies[b].id,
+                        p.node_of[b] + 1
+                    ),
+                ));
+            }
+        }
+    }
     let signal_channels: Vec<&str> = file
         .connections
         .iter()
@@ -401,6 +435,7 @@ pub fn validate(file: ScenarioFile) -> Result<Scenario> {
         links,
         forces,
         gravity,
+        springs,
         max_violation,
         measurement_period,
         output,

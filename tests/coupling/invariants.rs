@@ -569,3 +569,50 @@ fn uniform_gravity_changes_no_relative_motion_under_any_scheme() {
         }
     }
 }
+
+/// A spring inside a node of a partitioned scene: body 1 hangs on a spring from body 2,
+/// which a border link ties to body 3 on the other node. The ghost of body 2 on node 2
+/// feels the spring through its owner's load, so with samples every step and no
+/// latency the split follows the monolithic run to its partitioning floor.
+#[test]
+fn a_spring_inside_a_node_crosses_a_border_in_its_bodys_load() {
+    let scene = |split: bool| {
+        let mut v = json!({
+            "name": "spring and link", "seed": 1, "duration": 2.0, "dt": 0.001,
+            "integrator": "rk4",
+            "model": {
+                "bodies": [
+                    {"id": 1, "mass": 1.0, "size": 0.2, "position": [0, -1.2, 0], "velocity": [0.3, 0, 0]},
+                    {"id": 2, "mass": 1.0, "size": 0.2, "position": [0, 0, 0]},
+                    {"id": 3, "mass": 1.0, "size": 0.2, "position": [1.8, 0, 0], "velocity": [0, 0.5, 0]}
+                ],
+                "links": [{"a": 2, "b": 3}],
+                "springs": [{"a": 1, "b": 2, "stiffness": 40.0, "length": 1.0}]
+            }
+        });
+        if split {
+            v["partition"] = json!({"nodes": [[1, 2], [3]]});
+            v["channels"] = json!([{"name": "c", "tau": 0.001, "latency": 0.0}]);
+        }
+        v
+    };
+    let (mono, _) = run(&scene(false));
+    let (split, error) = run(&scene(true));
+    assert!(error.is_none(), "{error:?}");
+    let worst = mono
+        .absolute
+        .iter()
+        .zip(&split.absolute)
+        .flat_map(|(x, y)| x.iter().zip(y).map(|(p, q)| (p - q).norm()))
+        .fold(0.0, f64::max);
+    // Body 1 swings on its spring (it moves by decimetres): the check is not of a
+    // scene at rest.
+    let swung = mono
+        .absolute
+        .iter()
+        .map(|x| (x[0] - mono.absolute[0][0]).norm())
+        .fold(0.0, f64::max);
+    eprintln!("spring beside a border: split within {worst:.3e} m of monolithic (body 1 moved {swung:.2} m)");
+    assert!(swung > 0.1, "body 1 moved {swung} m");
+    assert!(worst < 1e-3, "split {worst} m from the monolithic run");
+}

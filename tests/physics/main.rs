@@ -11,6 +11,7 @@ use serde_json::{json, Value};
 mod joints;
 mod loads;
 mod mechanisms;
+mod springs;
 
 fn scenario(v: Value) -> Scenario {
     parse_str(&v.to_string(), "<test>").unwrap_or_else(|e| panic!("scenario: {e}"))

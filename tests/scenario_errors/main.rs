@@ -369,7 +369,7 @@ fn unknown_keys_are_rejected() {
     invalid(set("/output/format", json!("csv")), "output.format", "unknown field");
     invalid(set("/divergence/max_w", json!(1)), "divergence.max_w", "unknown field");
     invalid(set("/measurement/T", json!(1)), "measurement.T", "unknown field");
-    invalid(set("/model/springs", json!([])), "model.springs", "unknown field");
+    invalid(set("/model/dampers", json!([])), "model.dampers", "unknown field");
     invalid(set_grid("/model/grid/depth", json!(1)), "model.grid.depth", "unknown field");
     // A key holding an escaped newline stays on one line.
     invalid(set("/se\ned", json!(1)), "se\\ned", "unknown field");
