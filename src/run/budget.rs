@@ -38,6 +38,11 @@ pub const MEMORY_BASE: u64 = 10_000_000;
 /// at 64×64, 2.2 kB at 128×128, 2.4 kB at 256×256 and 512×512, 2.2 kB at 1000×1000;
 /// rounded up.
 pub const MEMORY_PER_BODY: u64 = 2_500;
+/// Memory per spring [bytes]: its specification (about 120 bytes) held by the
+/// scenario, the monolithic system and a partitioned run's node and its copy of the
+/// scenario, rounded up. Not measured as the per-body figure is: it is the size of what
+/// is held, not a peak (a spring adds no workspace).
+pub const MEMORY_PER_SPRING: u64 = 512;
 /// Memory per entry of the exact solve's factor [bytes] (the AMD-ordered sparse
 /// Cholesky's, as its symbolic analysis counts them). Measured peaks above the CG
 /// path's (same grids and command), per factor entry: 17.4 (64×64), 17.0 (128×128),
@@ -225,6 +230,7 @@ impl Estimate {
             };
         let memory_bytes = MEMORY_BASE
             .saturating_add(MEMORY_PER_BODY.saturating_mul(scenario.bodies.len() as u64))
+            .saturating_add(MEMORY_PER_SPRING.saturating_mul(scenario.springs.len() as u64))
             .saturating_add(BYTES_PER_FACTOR_ENTRY.saturating_mul(factor_entries));
         Estimate {
             steps,
