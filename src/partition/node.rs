@@ -16,7 +16,7 @@ use super::Layout;
 use crate::kernel::SimTime;
 use crate::multibody::{State, System};
 use crate::network::Payload;
-use crate::scenario::model::{BodyModel, Coupling, GhostMode, LoadAt, Scenario};
+use crate::scenario::model::{BodyModel, Coupling, GhostMode, Integrator, LoadAt, Scenario};
 
 /// A border force received from another node: held until the next arrival (`reset`),
 /// or extrapolated with its rate (`predict`).
@@ -1038,6 +1038,13 @@ fn line_ends(
         }
     };
     let reference = ComReference::new(scenario).velocity();
+    // How far the integrator's fall lags the continuous one (see LineEnd::falling).
+    let dt = scenario.dt.as_secs_f64();
+    let gravity_lag = match scenario.integrator {
+        Integrator::Euler => -dt,
+        Integrator::SymplecticEuler => dt,
+        Integrator::Rk4 => 0.0,
+    };
     let mut ends = Vec::new();
     for (l, link) in scenario.links.iter().enumerate() {
         let Some((z, delay)) = lines.impedance(l) else {
@@ -1072,7 +1079,7 @@ fn line_ends(
                     (z, delay),
                     initial_wave(z, delay, stretch, rate),
                 )
-                .falling(scenario.gravity),
+                .falling(scenario.gravity, gravity_lag),
             );
         }
     }
