@@ -11,14 +11,14 @@ use crate::control::CostMeter;
 use crate::error::{Divergence, Error, Place, Result};
 use crate::kernel::{EventClass, Kernel, SimTime};
 use crate::multibody::invariants::Invariants;
-use crate::multibody::{State, System};
 use crate::network::route::Route;
 use crate::network::tdma::{tdma_node, CycleReport, TdmaError};
 use crate::network::{Channel, Message, Payload};
 use crate::partition::line::LineSet;
+use crate::partition::node::WholeStart;
 use crate::partition::{Layout, Node};
 use crate::scenario::model::{
-    BodyModel, BodySpec, DataKind, NetworkSpec, Scenario, SignalSink, SignalSource, Stabilizer,
+    BodyModel, BodySpec, DataKind, NetworkSpec, Scenario, SignalSink, SignalSource,
 };
 
 /// The values of one step, as observers (trace recorder, digest) see them: the whole
@@ -259,15 +259,10 @@ impl CoSim {
             .map(|n| Node::new(scenario, &layout, n, &lines))
             .collect();
         // Under Baumgarte every node starts from the whole model's multipliers at t = 0
-        // (see Node::start_consistent). A failed evaluation here is the first step's,
-        // reported there.
-        if layout.nodes > 1 && matches!(scenario.stabilizer, Stabilizer::Baumgarte { .. }) {
-            let initial = State::initial(scenario);
-            let mut whole = System::new(scenario);
-            if whole.begin_step(SimTime::ZERO, &initial).is_ok() {
-                for node in &mut nodes {
-                    node.start_consistent(&whole, &initial, scenario);
-                }
+        // (see Node::start_consistent).
+        if let Some(whole) = WholeStart::new(scenario, layout.nodes) {
+            for node in &mut nodes {
+                node.start_consistent(&whole, scenario);
             }
         }
         // Each line's two ends, found once: (node, end index) at `a` and at `b`.

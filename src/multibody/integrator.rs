@@ -32,7 +32,7 @@ impl System {
         let r = self.rates(t, state, &mut k1);
         self.k[0] = k1;
         if r.is_ok() {
-            self.note_step_multipliers(t);
+            self.note_step_multipliers();
         }
         r
     }
@@ -113,7 +113,7 @@ impl System {
                 let mut k1 = std::mem::replace(&mut sys.k[0], empty_rates());
                 sys.rates_from_solution(state, &mut k1);
                 sys.k[0] = k1;
-                sys.note_step_multipliers(t);
+                sys.note_step_multipliers();
             }
             if let Some((i, e)) = first_solve_error {
                 return Err((base + i, EvalError::Solve(e)));

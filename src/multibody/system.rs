@@ -76,19 +76,13 @@ pub struct System {
     /// stabilizer absorbs, and the largest such residual among them.
     pub(crate) cg_stalled: usize,
     pub(crate) cg_worst: f64,
-    /// Under Baumgarte, the multipliers at the last step start (see
-    /// [`System::note_step_multipliers`]); empty under SMC, whose `ż` is a rate of the
-    /// ODE.
-    pub(crate) z_step: StepMultipliers,
-}
-
-/// Baumgarte's multipliers at the last step start (its first stage's evaluation).
-#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-pub(crate) struct StepMultipliers {
-    /// Time of `z` (none before the first step).
-    at: Option<SimTime>,
-    /// The multipliers at `at` [N].
-    z: Vec<f64>,
+    /// Whether the multipliers at each step start are kept for an alignment row's
+    /// slope: Baumgarte on a multi-stage integrator with a joint's alignment rows (see
+    /// [`System::multiplier_and_rate`]).
+    pub(crate) keeps_slopes: bool,
+    /// Those multipliers at the last step start; empty before the first step and when
+    /// none are kept.
+    pub(crate) z_step: Vec<f64>,
 }
 
 /// The rates of a system's extra loads over a step (see [`System::extra_rate`]).
@@ -247,7 +241,13 @@ impl System {
             max_violation: scenario.max_violation,
             cg_stalled: 0,
             cg_worst: 0.0,
-            z_step: StepMultipliers::default(),
+            keeps_slopes: matches!(scenario.stabilizer, Stabilizer::Baumgarte { .. })
+                && rk4
+                && scenario
+                    .links
+                    .iter()
+                    .any(|l| matches!(l.kind, RowKind::Align(_))),
+            z_step: Vec::new(),
         }
     }
 
@@ -474,9 +474,9 @@ impl System {
     /// `d(n z)/dt = ṅ z + n ż` [N/s] and `d(r × n z)/dt` [N·m/s], with
     /// `ṅ = (u − n (n·u)) / d` from the anchors' relative velocity `u` in `state`, and
     /// `ż` the SMC law's rate at the last evaluation (the slope the integrator used over
-    /// the step that ended at `state`). Under Baumgarte `z` is algebraic, and `ż` is its
-    /// backward difference over the last step ([`System::note_step_multipliers`]). One
-    /// pass for both, as a message needs both.
+    /// the step that ended at `state`). Under Baumgarte `z` is algebraic: only an
+    /// alignment row sends a `ż`, its slope over the last step
+    /// ([`System::multiplier_and_rate`]). One pass for both, as a message needs both.
     pub fn link_load_and_rate_on(
         &self,
         state: &super::State,
@@ -573,10 +573,8 @@ impl System {
             Stabilizer::Baumgarte { .. } => {
                 let z = self.ws.z_alg[l];
                 let aligns = matches!(self.links[l].kind, RowKind::Align(_));
-                let rate = match self.z_step.z.get(l) {
-                    Some(&start) if aligns && self.is_multistage() => {
-                        (z - start) / self.dt.as_secs_f64()
-                    }
+                let rate = match self.z_step.get(l) {
+                    Some(&start) if aligns => (z - start) / self.dt.as_secs_f64(),
                     _ => 0.0,
                 };
                 (z, rate)
@@ -584,8 +582,8 @@ impl System {
         }
     }
 
-    /// After the evaluation that begins a step at `t`: under Baumgarte, keeps the
-    /// multipliers, the start of the slope [`System::multiplier_and_rate`] sends.
+    /// After the evaluation that begins a step: keeps the multipliers, the start of the
+    /// slope [`System::multiplier_and_rate`] sends (when [`System::keeps_slopes`]).
     ///
     /// Why: a border force travels with its rate, `d(c z)/dt = ċ z + c ż` per row. A
     /// hinge's alignment rows turn with the body they are fixed in (a rotor's at its
@@ -593,12 +591,10 @@ impl System {
     /// without `ż` only the turning was extrapolated, and a spinning rotor on a border
     /// hinge was driven by a couple turning at its spin rate (its angular momentum off
     /// by 30 % at 20 ms with no latency, where holding the couple kept it to 1.5 %).
-    pub(crate) fn note_step_multipliers(&mut self, t: SimTime) {
-        if !matches!(self.stabilizer, Stabilizer::Baumgarte { .. }) {
-            return;
+    pub(crate) fn note_step_multipliers(&mut self) {
+        if self.keeps_slopes {
+            self.z_step.clone_from(&self.ws.z_alg);
         }
-        self.z_step.z.clone_from(&self.ws.z_alg);
-        self.z_step.at = Some(t);
     }
 
     /// The force [N] and torque [N·m] the springs put on body `body` in `state`.

@@ -7,6 +7,9 @@ use nalgebra::{Quaternion, Vector3};
 
 mod lines;
 mod passivity;
+mod start;
+
+pub use start::WholeStart;
 
 use super::com::ComReference;
 use super::coupling::{Correction, Extrapolated, GhostHistory, GhostSample, PortAccount};
@@ -300,94 +303,6 @@ impl Node {
     /// Local index of global body `g`, if this node holds it.
     pub fn local(&self, g: usize) -> Option<usize> {
         self.local_body.get(&g).copied()
-    }
-
-    /// Starts the border from the whole model's initial multipliers: this node's rows'
-    /// multipliers, the border forces it holds and its ghosts' owner-side loads as
-    /// `whole` (the monolithic system, evaluated at `initial`) has them at t = 0.
-    ///
-    /// Why: under Baumgarte the multipliers are algebraic, and at t = 0 a node knows
-    /// neither the forces of the rows it does not hold nor the loads on its ghosts
-    /// before a message brings them, a sample period later. Its first samples (taken
-    /// before the first step) then carried no force, or one that left out the load
-    /// behind a ghost: a hanging chain split at a border joint started with its lower
-    /// half unsupported, the error was of order dt (a partitioned RK4 run fell to first
-    /// order), and a chain at rest was set swinging. The monolithic solve at t = 0 is
-    /// what every node would agree on with an instant network; from there on each
-    /// node's own law and messages take over. Under SMC the multipliers are state and
-    /// start at zero on every node alike, so this is not used (and the thesis scenes
-    /// keep their digests).
-    pub fn start_consistent(&mut self, whole: &System, initial: &State, scenario: &Scenario) {
-        let joint_of = |r: usize| scenario.links[r].joint.map(|(j, _)| j);
-        // The rows of the link or joint whose first row is `l`.
-        let rows_of = |l: usize| -> Vec<usize> {
-            match joint_of(l) {
-                None => vec![l],
-                j => (l..scenario.links.len())
-                    .take_while(|&r| joint_of(r) == j)
-                    .collect(),
-            }
-        };
-        let load_on = |rows: &[usize], g: usize| {
-            rows.iter()
-                .filter(|&&r| self.line_index(r).is_none())
-                .map(|&r| whole.link_load_on(initial, r, g))
-                .fold((Vector3::zeros(), Vector3::zeros()), |a, b| {
-                    (a.0 + b.0, a.1 + b.1)
-                })
-        };
-        let z: Vec<f64> = self
-            .links
-            .iter()
-            .map(|&l| whole.multiplier(initial, l))
-            .collect();
-        let held: Vec<(Vector3<f64>, Vector3<f64>)> = self
-            .held_forces
-            .iter()
-            .map(|h| load_on(&rows_of(h.link), self.bodies[h.body]))
-            .collect();
-        let ghosts: Vec<(Vector3<f64>, Vector3<f64>)> = (self.owned..self.bodies.len())
-            .map(|k| {
-                let g = self.bodies[k];
-                let others: Vec<usize> = (0..scenario.links.len())
-                    .filter(|&r| {
-                        let link = &scenario.links[r];
-                        (link.a == g || (link.b == g && !link.world)) && !self.links.contains(&r)
-                    })
-                    .collect();
-                let (mut force, mut torque) = load_on(&others, g);
-                let (fs, ts) = whole.spring_load_on(initial, g);
-                force += fs;
-                torque += ts;
-                let q = initial
-                    .q
-                    .get(g)
-                    .copied()
-                    .unwrap_or_else(Quaternion::identity);
-                let rotation = nalgebra::UnitQuaternion::new_normalize(q);
-                for f in scenario.forces.iter().filter(|f| f.body == g) {
-                    let (fv, tv) = f.load(SimTime::ZERO, &rotation);
-                    force += fv;
-                    torque += tv;
-                }
-                (force, torque)
-            })
-            .collect();
-        self.system.set_multipliers(&z);
-        for (h, (force, torque)) in self.held_forces.iter_mut().zip(held) {
-            h.value = Extrapolated {
-                force,
-                torque,
-                ..Extrapolated::zero()
-            };
-        }
-        for (load, (force, torque)) in self.coupling.ghost_loads.iter_mut().zip(ghosts) {
-            *load = Extrapolated {
-                force,
-                torque,
-                ..Extrapolated::zero()
-            };
-        }
     }
 
     /// A coordinate of owned body `g`'s state now: position x, y, z [m] for `quantity`

@@ -24,13 +24,14 @@ pub const MEASURABLE_SHARE: f64 = 0.01;
 pub struct JointWork {
     /// The rows of the model's joints (indices into the links).
     rows: Vec<usize>,
-    /// `(f, w)` of each row at the last step.
-    last: Option<Vec<(f64, f64)>>,
+    /// `(f, w)` of each row at the last step (empty before the first).
+    last: Vec<(f64, f64)>,
     /// Net work of the rows' forces on the bodies [J].
     pub net: f64,
     /// `∫ |z ẇ| dt` [J]: work done either way.
     pub gross: f64,
-    /// Largest kinetic energy at any recorded step [J].
+    /// Largest kinetic energy at the steps whose invariants the recorder computes (the
+    /// trace's rows and summary.json's steps) [J].
     pub kinetic_max: f64,
     /// Time of the step with the largest net work so far, and that work [J].
     pub worst: (SimTime, f64),
@@ -65,7 +66,7 @@ impl JointWork {
         (!rows.is_empty()).then_some(JointWork {
             cause,
             rows,
-            last: None,
+            last: Vec::new(),
             net: 0.0,
             gross: 0.0,
             kinetic_max: 0.0,
@@ -73,22 +74,27 @@ impl JointWork {
         })
     }
 
-    /// Counts the step at `t` with every link's tension `f` [N] and value `w`, and the
-    /// net's kinetic energy [J].
-    pub fn record(&mut self, t: SimTime, f: &[f64], w: &[f64], kinetic: f64) {
-        self.kinetic_max = self.kinetic_max.max(kinetic);
-        let now: Vec<(f64, f64)> = self.rows.iter().map(|&l| (f[l], w[l])).collect();
-        if let Some(last) = &self.last {
-            for (&(f0, w0), &(f1, w1)) in last.iter().zip(&now) {
-                let work = -0.5 * (f0 + f1) * (w1 - w0);
-                self.net += work;
-                self.gross += work.abs();
-            }
-            if self.net.abs() > self.worst.1.abs() {
-                self.worst = (t, self.net);
-            }
+    /// Counts the step at `t` with every link's tension `f` [N] and value `w`.
+    pub fn record(&mut self, t: SimTime, f: &[f64], w: &[f64]) {
+        if self.last.is_empty() {
+            self.last = self.rows.iter().map(|&l| (f[l], w[l])).collect();
+            return;
         }
-        self.last = Some(now);
+        for (&l, last) in self.rows.iter().zip(&mut self.last) {
+            let (f0, w0) = *last;
+            let work = -0.5 * (f0 + f[l]) * (w[l] - w0);
+            self.net += work;
+            self.gross += work.abs();
+            *last = (f[l], w[l]);
+        }
+        if self.net.abs() > self.worst.1.abs() {
+            self.worst = (t, self.net);
+        }
+    }
+
+    /// Counts the net's kinetic energy [J] at a step.
+    pub fn kinetic(&mut self, energy: f64) {
+        self.kinetic_max = self.kinetic_max.max(energy);
     }
 
     /// The net work as a share of the largest kinetic energy (0 when nothing moved).
@@ -160,13 +166,14 @@ mod tests {
         let s = pendulum(r#"{"kind": "smc"}"#);
         let mut watch = JointWork::new(&s).expect("a joint");
         // Three rows; row 0 opens by 1 mm against a tension of 10 N: −10 × 1e-3 J.
-        watch.record(SimTime(0), &[10.0, 5.0, 1.0], &[0.0, 0.0, 0.0], 0.5);
-        watch.record(SimTime(1), &[10.0, 5.0, 1.0], &[1e-3, 0.0, 0.0], 0.5);
+        watch.kinetic(0.5);
+        watch.record(SimTime(0), &[10.0, 5.0, 1.0], &[0.0, 0.0, 0.0]);
+        watch.record(SimTime(1), &[10.0, 5.0, 1.0], &[1e-3, 0.0, 0.0]);
         assert!((watch.net + 1e-2).abs() < 1e-15, "{}", watch.net);
         assert!(watch.warning().is_some());
         // Closing again under the same tension gives it back: no net work, and gross
         // counts both.
-        watch.record(SimTime(2), &[10.0, 5.0, 1.0], &[0.0, 0.0, 0.0], 0.5);
+        watch.record(SimTime(2), &[10.0, 5.0, 1.0], &[0.0, 0.0, 0.0]);
         assert!(watch.net.abs() < 1e-15 && (watch.gross - 2e-2).abs() < 1e-15);
         assert!(watch.warning().is_none());
     }

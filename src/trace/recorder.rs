@@ -274,7 +274,7 @@ impl Recorder {
             layer.record(s.time, s.max_w);
         }
         if let Some(work) = &mut self.joint_work {
-            work.record(s.time, s.f, s.w, s.invariants().kinetic_energy);
+            work.record(s.time, s.f, s.w);
         }
         let row = s.step.is_multiple_of(self.decimation) || s.last;
         // The invariants cost a pass over the bodies: computed on the rows the trace
@@ -283,6 +283,9 @@ impl Recorder {
             return Ok(());
         }
         let invariants = s.invariants();
+        if let Some(work) = &mut self.joint_work {
+            work.kinetic(invariants.kinetic_energy);
+        }
         self.invariants.record(s.step, s.time, invariants, row);
         if !row {
             return Ok(());
