@@ -11,17 +11,9 @@ use crate::scenario::model::SpringSpec;
 /// `d` the anchors' distance, `ḋ` its rate and `n` the unit vector from `b`'s anchor to
 /// `a`'s. Anchors off the centre exist only on the rigid path (validation).
 pub(crate) fn loads(s: &SpringSpec, state: &State, rigid: bool) -> [Vector3<f64>; 4] {
-    let anchor = |i: usize, r: &Vector3<f64>| {
-        if rigid {
-            let rr = UnitQuaternion::new_normalize(state.q[i]) * r;
-            (state.p[i] + rr, state.v[i] + state.omega[i].cross(&rr), rr)
-        } else {
-            (state.p[i], state.v[i], Vector3::zeros())
-        }
-    };
-    let (pa, va, ra) = anchor(s.a, &s.anchor_a);
+    let (pa, va, ra) = anchor(state, s.a, &s.anchor_a, rigid);
     let (pb, vb, rb) = match s.b {
-        Some(b) => anchor(b, &s.anchor_b),
+        Some(b) => anchor(state, b, &s.anchor_b, rigid),
         None => (s.anchor_b, Vector3::zeros(), Vector3::zeros()),
     };
     let delta = pa - pb;
@@ -39,14 +31,25 @@ pub(crate) fn loads(s: &SpringSpec, state: &State, rigid: bool) -> [Vector3<f64>
 
 /// The spring's potential energy `k (d − L)² / 2` [J] in `state`.
 pub fn energy(s: &SpringSpec, state: &State, rigid: bool) -> f64 {
-    let point = |i: usize, r: &Vector3<f64>| {
-        if rigid {
-            state.p[i] + UnitQuaternion::new_normalize(state.q[i]) * r
-        } else {
-            state.p[i]
-        }
-    };
-    let pb = s.b.map_or(s.anchor_b, |b| point(b, &s.anchor_b));
-    let stretch = (point(s.a, &s.anchor_a) - pb).norm() - s.length;
+    let pa = anchor(state, s.a, &s.anchor_a, rigid).0;
+    let pb =
+        s.b.map_or(s.anchor_b, |b| anchor(state, b, &s.anchor_b, rigid).0);
+    let stretch = (pa - pb).norm() - s.length;
     0.5 * s.stiffness * stretch * stretch
+}
+
+/// Body `i`'s anchor `r` (body frame) in `state`: its world point, velocity and offset
+/// from the centre (point masses: the centre's, no offset).
+fn anchor(
+    state: &State,
+    i: usize,
+    r: &Vector3<f64>,
+    rigid: bool,
+) -> (Vector3<f64>, Vector3<f64>, Vector3<f64>) {
+    if rigid {
+        let rr = UnitQuaternion::new_normalize(state.q[i]) * r;
+        (state.p[i] + rr, state.v[i] + state.omega[i].cross(&rr), rr)
+    } else {
+        (state.p[i], state.v[i], Vector3::zeros())
+    }
 }

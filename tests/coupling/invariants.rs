@@ -48,6 +48,14 @@ impl Observer for Invariants {
     }
 }
 
+/// The largest distance between the same body of two runs at the same step [m].
+fn farthest(a: &[Vec<Vector3<f64>>], b: &[Vec<Vector3<f64>>]) -> f64 {
+    a.iter()
+        .zip(b)
+        .flat_map(|(x, y)| x.iter().zip(y).map(|(p, q)| (p - q).norm()))
+        .fold(0.0, f64::max)
+}
+
 fn run(v: &Value) -> (Invariants, Option<String>) {
     let s = parse_str(&v.to_string(), "<test>").unwrap_or_else(|e| panic!("scenario: {e}"));
     let mut inv = Invariants {
@@ -139,12 +147,7 @@ fn a_uniform_velocity_added_changes_no_relative_motion() {
                     ea.is_none() && eb.is_none(),
                     "{coupling}, τ = {tau}: {ea:?} {eb:?}"
                 );
-                let worst = a
-                    .relative
-                    .iter()
-                    .zip(&b.relative)
-                    .flat_map(|(x, y)| x.iter().zip(y).map(|(p, q)| (p - q).norm()))
-                    .fold(0.0, f64::max);
+                let worst = farthest(&a.relative, &b.relative);
                 assert!(
                     worst <= 1e-6,
                     "{coupling}, τ = {tau}, shift {shift:?}: relative positions differ by {worst:e} m"
@@ -256,12 +259,7 @@ fn rk4_order_with_no_delay(law: Value) {
         // ratios say nothing of an order: there the measure is what the split adds to
         // the monolithic run at the same step, the largest distance between the runs'
         // bodies.
-        let apart = m
-            .absolute
-            .iter()
-            .zip(&s.absolute)
-            .flat_map(|(x, y)| x.iter().zip(y).map(|(p, q)| (p - q).norm()))
-            .fold(0.0, f64::max);
+        let apart = farthest(&m.absolute, &s.absolute);
         gains.push(if law.is_null() { gain.abs() } else { apart });
     }
     let orders: Vec<f64> = gains.windows(2).map(|p| (p[0] / p[1]).log2()).collect();
@@ -546,12 +544,7 @@ fn uniform_gravity_changes_no_relative_motion_under_any_scheme() {
                 ea.is_none() && eb.is_none(),
                 "{coupling}, τ = {tau}: {ea:?} {eb:?}"
             );
-            let worst = a
-                .relative
-                .iter()
-                .zip(&b.relative)
-                .flat_map(|(x, y)| x.iter().zip(y).map(|(p, q)| (p - q).norm()))
-                .fold(0.0, f64::max);
+            let worst = farthest(&a.relative, &b.relative);
             // Both ways: the ring did fall (44 m in 3 s) and did move relative to its
             // centre (it spins), so agreement is not two frozen runs.
             let fell = a.absolute.last().unwrap()[0].z - b.absolute.last().unwrap()[0].z;
@@ -598,12 +591,7 @@ fn a_spring_inside_a_node_crosses_a_border_in_its_bodys_load() {
     let (mono, _) = run(&scene(false));
     let (split, error) = run(&scene(true));
     assert!(error.is_none(), "{error:?}");
-    let worst = mono
-        .absolute
-        .iter()
-        .zip(&split.absolute)
-        .flat_map(|(x, y)| x.iter().zip(y).map(|(p, q)| (p - q).norm()))
-        .fold(0.0, f64::max);
+    let worst = farthest(&mono.absolute, &split.absolute);
     // Body 1 swings on its spring (it moves by decimetres): the check is not of a
     // scene at rest.
     let swung = mono

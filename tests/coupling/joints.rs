@@ -63,6 +63,15 @@ fn record(v: &Value) -> Record {
     r
 }
 
+/// The largest distance between either rod of two runs at the same step [m].
+fn farthest(a: &Record, b: &Record) -> f64 {
+    a.positions
+        .iter()
+        .zip(&b.positions)
+        .map(|(a, b)| (a[0] - b[0]).norm().max((a[1] - b[1]).norm()))
+        .fold(0.0, f64::max)
+}
+
 /// The largest |E(t) − E(0)| [J].
 fn energy_drift(r: &Record) -> f64 {
     r.energy
@@ -84,12 +93,7 @@ fn a_border_joint_follows_the_monolithic_run_at_tau_dt_and_keeps_its_energy() {
             .fold(f64::INFINITY, f64::min);
     for scheme in ["predict", "passive", "tlm"] {
         let split = record(&double_pendulum(Some((scheme, 0.001))));
-        let worst = mono
-            .positions
-            .iter()
-            .zip(&split.positions)
-            .map(|(a, b)| (a[0] - b[0]).norm().max((a[1] - b[1]).norm()))
-            .fold(0.0, f64::max);
+        let worst = farthest(&mono, &split);
         let drift = energy_drift(&split);
         eprintln!(
             "{scheme}: {worst:.3e} m from monolithic over 3 s; energy drift {drift:.3e} J \
@@ -301,46 +305,30 @@ fn a_chain_at_rest_split_at_a_border_joint_stays_at_rest() {
     }
 }
 
-/// Five uniform rods (1 kg, 1 m) on four ball joints, tumbling with no gravity (the
-/// free chain of the physics tests), for 3 s; with `split`, rods 1–2 and 3–5 on two
-/// nodes (the joint between rods 2 and 3 a border joint) under the default coupling
-/// at τ.
-fn free_chain(split: Option<f64>) -> Value {
-    let n = 5;
-    let spins: Vec<Vector3<f64>> = (0..n)
-        .map(|i| {
-            let f = i as f64;
-            Vector3::new(0.3 * f.cos(), 1.0 + 0.7 * f.sin(), 0.5 - 0.4 * f)
-        })
-        .collect();
-    let centre = |i: usize| Vector3::new(i as f64 + 0.5, 0.0, 0.0);
-    let mut v = vec![Vector3::new(0.2, -0.1, 0.3)];
-    for i in 0..n - 1 {
-        let joint = Vector3::new(i as f64 + 1.0, 0.0, 0.0);
-        let next = v[i] + spins[i].cross(&(joint - centre(i)))
-            - spins[i + 1].cross(&(joint - centre(i + 1)));
-        v.push(next);
-    }
-    let bodies: Vec<Value> = (0..n)
-        .map(|i| {
-            let (c, vi, w) = (centre(i), v[i], spins[i]);
-            json!({"id": i + 1, "mass": 1.0, "size": 0.05, "inertia": [1e-3, 1.0 / 12.0, 1.0 / 12.0],
-                   "position": [c.x, c.y, c.z], "velocity": [vi.x, vi.y, vi.z],
-                   "angular_velocity": [w.x, w.y, w.z]})
-        })
-        .collect();
-    let joints: Vec<Value> = (1..n)
-        .map(|j| json!({"type": "ball", "a": j, "b": j + 1, "at": [j as f64, 0, 0]}))
-        .collect();
-    let mut v = json!({
-        "name": "free chain", "seed": 1, "duration": 3.0, "dt": 0.001, "integrator": "rk4",
-        "model": {"bodies": bodies, "joints": joints}
-    });
-    if let Some(tau) = split {
-        v["partition"] = json!({"nodes": [[1, 2], [3, 4, 5]]});
-        v["channels"] = json!([{"name": "border", "tau": tau}]);
+/// The shipped mechanism `scenarios/mechanisms/<name>.json` (two nodes, one border
+/// joint, 3 s) with its channel at τ under the default coupling, or on one node.
+fn shipped_split(name: &str, split: Option<f64>) -> Value {
+    let path = format!(
+        "{}/scenarios/mechanisms/{name}.json",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let mut v: Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).expect("shipped")).expect("JSON");
+    match split {
+        Some(tau) => v["channels"][0]["tau"] = json!(tau),
+        None => {
+            let o = v.as_object_mut().expect("object");
+            o.remove("partition");
+            o.remove("channels");
+        }
     }
     v
+}
+
+/// Five uniform rods on four ball joints, tumbling with no gravity
+/// (`free_chain5.json`: rods 1–2 and 3–5 on two nodes).
+fn free_chain(split: Option<f64>) -> Value {
+    shipped_split("free_chain5", split)
 }
 
 /// The largest `|ΔP|` [kg·m/s], `|ΔL|/|L₀|` and signed `ΔKE/KE₀` (the one of largest
@@ -440,12 +428,7 @@ fn a_double_pendulum_split_at_its_middle_joint_keeps_its_energy_under_delay() {
             let mut v = with(double_pendulum(Some((scheme, tau))));
             v["channels"][0].as_object_mut().unwrap().remove("latency");
             let split = record(&v);
-            let worst = mono
-                .positions
-                .iter()
-                .zip(&split.positions)
-                .map(|(a, b)| (a[0] - b[0]).norm().max((a[1] - b[1]).norm()))
-                .fold(0.0, f64::max);
+            let worst = farthest(&mono, &split);
             let drift = energy_drift(&split);
             eprintln!(
                 "double pendulum ({law}), {scheme} at τ = {} ms: {worst:.3e} m from \
@@ -462,32 +445,10 @@ fn a_double_pendulum_split_at_its_middle_joint_keeps_its_energy_under_delay() {
     }
 }
 
-/// A 10 kg platform tumbling in space with a 2 kg rotor on a hinge (axis along the
-/// platform's z) spinning at 20 rad/s relative to it, for 3 s; with `split`, platform
-/// and rotor on two nodes (the hinge a border joint) under the default coupling at τ.
+/// A 10 kg platform tumbling in space with a 2 kg rotor on a hinge spinning at
+/// 20 rad/s relative to it (`platform_rotor.json`: platform and rotor on two nodes).
 fn platform_and_rotor(split: Option<f64>) -> Value {
-    let wp = Vector3::new(0.5, 0.2, 0.0);
-    let wr = wp + Vector3::new(0.0, 0.0, 20.0);
-    let vr = wp.cross(&Vector3::new(0.0, 0.0, 0.4));
-    let mut v = json!({
-        "name": "platform and rotor", "seed": 1, "duration": 3.0, "dt": 0.001,
-        "integrator": "rk4",
-        "model": {
-            "bodies": [
-                {"id": 1, "mass": 10.0, "size": 0.4, "position": [0, 0, 0],
-                 "angular_velocity": [wp.x, wp.y, wp.z]},
-                {"id": 2, "mass": 2.0, "size": 0.1, "inertia": [0.02, 0.02, 0.04],
-                 "position": [0, 0, 0.4], "velocity": [vr.x, vr.y, vr.z],
-                 "angular_velocity": [wr.x, wr.y, wr.z]}
-            ],
-            "joints": [{"type": "hinge", "a": 1, "b": 2, "at": [0, 0, 0.25], "axis": [0, 0, 1]}]
-        }
-    });
-    if let Some(tau) = split {
-        v["partition"] = json!({"nodes": [[1], [2]]});
-        v["channels"] = json!([{"name": "border", "tau": tau}]);
-    }
-    v
+    shipped_split("platform_rotor", split)
 }
 
 /// The hinge between the platform and its rotor split over two nodes keeps the

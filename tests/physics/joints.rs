@@ -7,7 +7,7 @@ use std::f64::consts::PI;
 use nalgebra::{UnitQuaternion, Vector3};
 use serde_json::{json, Value};
 
-use super::{scenario, simulate};
+use super::{elliptic_k, scenario, simulate};
 
 const G: f64 = 9.81;
 
@@ -64,16 +64,6 @@ fn period(v: Value) -> f64 {
     let c = crossings(v);
     assert!(c.len() >= 3, "only {} crossings", c.len());
     (c[c.len() - 1] - c[0]) / (c.len() - 1) as f64
-}
-
-/// Complete elliptic integral of the first kind K(k), by the arithmetic-geometric
-/// mean: K = π / (2 AGM(1, √(1 − k²))).
-fn elliptic_k(k: f64) -> f64 {
-    let (mut a, mut b) = (1.0f64, (1.0 - k * k).sqrt());
-    for _ in 0..40 {
-        (a, b) = ((a + b) / 2.0, (a * b).sqrt());
-    }
-    PI / (2.0 * a)
 }
 
 #[test]

@@ -13,6 +13,16 @@ mod loads;
 mod mechanisms;
 mod springs;
 
+/// Complete elliptic integral of the first kind K(k), by the arithmetic-geometric
+/// mean: K = π / (2 AGM(1, √(1 − k²))).
+fn elliptic_k(k: f64) -> f64 {
+    let (mut a, mut b) = (1.0f64, (1.0 - k * k).sqrt());
+    for _ in 0..40 {
+        (a, b) = ((a + b) / 2.0, (a * b).sqrt());
+    }
+    std::f64::consts::PI / (2.0 * a)
+}
+
 fn scenario(v: Value) -> Scenario {
     parse_str(&v.to_string(), "<test>").unwrap_or_else(|e| panic!("scenario: {e}"))
 }

@@ -11,7 +11,7 @@ use dsmcosim::scenario::model::Stabilizer;
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 use serde_json::{json, Value};
 
-use super::{scenario, simulate};
+use super::{elliptic_k, scenario, simulate};
 
 const G: f64 = 9.81;
 
@@ -226,40 +226,20 @@ fn a_conical_pendulum_keeps_its_cone_and_its_closed_form_period() {
 /// force or torque: momentum, angular momentum and kinetic energy are conserved.
 #[test]
 fn a_free_chain_on_ball_joints_keeps_momentum_angular_momentum_and_energy() {
-    let n = 5;
-    let inertia = [1e-3, 1.0 / 12.0, 1.0 / 12.0];
-    let spins: Vec<Vector3<f64>> = (0..n)
-        .map(|i| {
-            let f = i as f64;
-            Vector3::new(0.3 * f.cos(), 1.0 + 0.7 * f.sin(), 0.5 - 0.4 * f)
-        })
-        .collect();
-    // Centres on x; joint j between rod j and j + 1 at x = j + 1. The velocity of rod
-    // i + 1's centre follows from the joint's: v_{i+1} = v_i + ω_i × (J − c_i) − ω_{i+1}
-    // × (J − c_{i+1}).
-    let centre = |i: usize| Vector3::new(i as f64 + 0.5, 0.0, 0.0);
-    let mut v = vec![Vector3::new(0.2, -0.1, 0.3)];
-    for i in 0..n - 1 {
-        let joint = Vector3::new(i as f64 + 1.0, 0.0, 0.0);
-        let next = v[i] + spins[i].cross(&(joint - centre(i)))
-            - spins[i + 1].cross(&(joint - centre(i + 1)));
-        v.push(next);
+    // The shipped chain (its velocities built so every joint's two anchors move alike),
+    // on one node, for 5 s.
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenarios/mechanisms/free_chain5.json"
+    );
+    let mut v: Value =
+        serde_json::from_str(&std::fs::read_to_string(path).expect("shipped")).expect("JSON");
+    for key in ["partition", "channels", "output"] {
+        v.as_object_mut().expect("object").remove(key);
     }
-    let bodies: Vec<Value> = (0..n)
-        .map(|i| {
-            let (c, vi, w) = (centre(i), v[i], spins[i]);
-            json!({"id": i + 1, "mass": 1.0, "size": 0.05, "inertia": inertia,
-                   "position": [c.x, c.y, c.z], "velocity": [vi.x, vi.y, vi.z],
-                   "angular_velocity": [w.x, w.y, w.z]})
-        })
-        .collect();
-    let joints: Vec<Value> = (1..n)
-        .map(|j| json!({"type": "ball", "a": j, "b": j + 1, "at": [j as f64, 0, 0]}))
-        .collect();
-    let s = scenario(json!({
-        "name": "free chain", "seed": 1, "duration": 5.0, "dt": 0.001, "integrator": "rk4",
-        "model": {"bodies": bodies, "joints": joints}
-    }));
+    v["duration"] = json!(5.0);
+    let s = scenario(v);
+    let n = s.bodies.len();
     let initial = State::initial(&s);
     let momentum = |st: &State| st.v.iter().sum::<Vector3<f64>>();
     let (p0, l0, e0) = (
@@ -290,34 +270,53 @@ fn a_free_chain_on_ball_joints_keeps_momentum_angular_momentum_and_energy() {
     assert!(dl < 1e-6 && de < 1e-6, "ΔL {dl}, ΔKE {de}");
 }
 
-/// The complete elliptic integral of the first kind K(k), by the arithmetic-geometric
-/// mean.
-fn elliptic_k(k: f64) -> f64 {
-    let (mut a, mut b) = (1.0f64, (1.0 - k * k).sqrt());
-    for _ in 0..40 {
-        (a, b) = ((a + b) / 2.0, (a * b).sqrt());
+/// `θ` of `θ̈ = −k sin θ` from `θ(0) = theta0`, `θ̇(0) = rate0`, integrated here by RK4
+/// at `h` over `duration` and sampled every `every` steps.
+fn pendulum_angles(
+    k: f64,
+    (theta0, rate0): (f64, f64),
+    h: f64,
+    duration: f64,
+    every: usize,
+) -> Vec<f64> {
+    let rate = |y: [f64; 2]| [y[1], -k * y[0].sin()];
+    let add = |y: [f64; 2], d: [f64; 2], s: f64| [y[0] + s * d[0], y[1] + s * d[1]];
+    let mut y = [theta0, rate0];
+    let mut out = vec![y[0]];
+    for step in 1..=(duration / h).round() as usize {
+        let k1 = rate(y);
+        let k2 = rate(add(y, k1, h / 2.0));
+        let k3 = rate(add(y, k2, h / 2.0));
+        let k4 = rate(add(y, k3, h));
+        y = [
+            y[0] + h / 6.0 * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0]),
+            y[1] + h / 6.0 * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1]),
+        ];
+        if step % every == 0 {
+            out.push(y[0]);
+        }
     }
-    PI / (2.0 * a)
+    out
 }
 
-/// A planar parallelogram four-bar built of hinges only: two cranks (1 kg, 1 m) hang
-/// from world hinges 1.5 m apart and carry a 2 kg coupler on two more hinges, every
-/// axis along y. Four hinges give 20 rows on 18 coordinates for one degree of freedom:
-/// three rows depend on the others (a planar loop in space), and the solve must drop
-/// them rather than stop. The coupler translates, so the mechanism is one pendulum,
-/// `(2 m L²/3 + M L²) θ̈ = −(m + M) g L sin θ`, whose period at amplitude θ₀ is
-/// `4 K(sin(θ₀/2)) / ω₀` with `ω₀² = g (m + M) / (L (2m/3 + M))`.
-#[test]
-fn a_four_bar_of_hinges_drops_its_redundant_rows_and_swings_with_its_closed_form_period() {
-    let (m, big_m, l, span, spin) = (1.0, 2.0, 1.0, 1.5, 2.0);
+// The four-bars: two 1 kg, 1 m cranks on world hinges `span` apart carrying a 2 kg
+// coupler on two more hinges, every axis along y, under gravity.
+const CRANK: f64 = 1.0;
+const COUPLER: f64 = 2.0;
+const ARM: f64 = 1.0;
+
+/// The four-bar with its cranks hanging down and turning at `spin` [rad/s] (along −x
+/// at the bottom), for `duration`.
+fn four_bar(span: f64, spin: f64, duration: f64) -> Value {
+    let (m, big_m, l) = (CRANK, COUPLER, ARM);
     let crank = |id: u32, x: f64| {
         json!({"id": id, "mass": m, "size": 0.05,
                "inertia": [m * l * l / 12.0, m * l * l / 12.0, 1e-4],
                "position": [x, 0, -l / 2.0], "velocity": [-spin * l / 2.0, 0, 0],
                "angular_velocity": [0, spin, 0]})
     };
-    let s = scenario(json!({
-        "name": "four-bar", "seed": 1, "duration": 8.0, "dt": 0.001, "integrator": "rk4",
+    json!({
+        "name": "four-bar", "seed": 1, "duration": duration, "dt": 0.001, "integrator": "rk4",
         "model": {
             "gravity": [0, 0, -G],
             "bodies": [
@@ -333,11 +332,28 @@ fn a_four_bar_of_hinges_drops_its_redundant_rows_and_swings_with_its_closed_form
                 {"type": "hinge", "a": 2, "b": 3, "at": [span, 0, -l], "axis": [0, 1, 0]}
             ]
         }
-    }));
-    let omega0 = (G * (m + big_m) / (l * (2.0 * m / 3.0 + big_m))).sqrt();
-    // The amplitude from the energy: ½ I Ω² = (m + M) g L (1 − cos θ₀).
-    let inertia = 2.0 * m * l * l / 3.0 + big_m * l * l;
-    let amplitude = (1.0 - 0.5 * inertia * spin * spin / ((m + big_m) * G * l)).acos();
+    })
+}
+
+/// The coupler translates, so a four-bar is one pendulum in its cranks' angle θ:
+/// `(2 m L²/3 + M L²) θ̈ = −(m + M) g L sin θ`; this is its `k` in `θ̈ = −k sin θ`.
+fn four_bar_k() -> f64 {
+    let inertia = 2.0 * CRANK * ARM * ARM / 3.0 + COUPLER * ARM * ARM;
+    (CRANK + COUPLER) * G * ARM / inertia
+}
+
+/// A planar parallelogram four-bar built of hinges only, its world hinges 1.5 m apart.
+/// Four hinges give 20 rows on 18 coordinates for one degree of freedom: three rows
+/// depend on the others (a planar loop in space), and the solve must drop them rather
+/// than stop. Its period at amplitude θ₀ is `4 K(sin(θ₀/2)) / ω₀`, `ω₀² = k`
+/// ([`four_bar_k`]).
+#[test]
+fn a_four_bar_of_hinges_drops_its_redundant_rows_and_swings_with_its_closed_form_period() {
+    let (span, spin) = (1.5, 2.0);
+    let s = scenario(four_bar(span, spin, 8.0));
+    let omega0 = four_bar_k().sqrt();
+    // The amplitude from the energy: ½ θ̇² = k (1 − cos θ₀).
+    let amplitude = (1.0 - 0.5 * spin * spin / four_bar_k()).acos();
     let want = 4.0 * elliptic_k((amplitude / 2.0).sin()) / omega0;
     let (mut up, mut last, mut turned, mut worst_energy) =
         (Vec::new(), None::<(f64, f64)>, 0.0f64, 0.0f64);
@@ -385,27 +401,10 @@ fn a_point_mass_pendulum_released_horizontal_follows_its_equation() {
         }
     }));
     // θ from the downward vertical; the bob starts at θ = π/2 (along +x).
-    let h = dt / 10.0;
-    let rate = |y: [f64; 2]| [y[1], -(G / l) * y[0].sin()];
-    let mut y = [PI / 2.0, 0.0];
-    let mut reference = vec![y];
-    for k in 1..=(duration / h).round() as usize {
-        let add = |y: [f64; 2], k: [f64; 2], s: f64| [y[0] + s * k[0], y[1] + s * k[1]];
-        let k1 = rate(y);
-        let k2 = rate(add(y, k1, h / 2.0));
-        let k3 = rate(add(y, k2, h / 2.0));
-        let k4 = rate(add(y, k3, h));
-        y = [
-            y[0] + h / 6.0 * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0]),
-            y[1] + h / 6.0 * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1]),
-        ];
-        if k % 10 == 0 {
-            reference.push(y);
-        }
-    }
+    let reference = pendulum_angles(G / l, (PI / 2.0, 0.0), dt / 10.0, duration, 10);
     let (mut worst, mut k) = (0.0f64, 0);
     simulate(&s, |_, _, st| {
-        let theta = reference[k][0];
+        let theta = reference[k];
         let want = Vector3::new(l * theta.sin(), 0.0, -l * theta.cos());
         worst = worst.max((st.p[0] - want).norm());
         k += 1;
@@ -414,69 +413,24 @@ fn a_point_mass_pendulum_released_horizontal_follows_its_equation() {
     assert!(worst < 1e-4, "{worst} m from the pendulum's equation");
 }
 
-/// The hinge four-bar of the last test with a span equal to its cranks' length, spun
-/// fast enough to turn over: each time its cranks pass the horizontal, all four bars lie
-/// on one line and its constraint rows lose rank (the singular position of the IFToMM
-/// benchmark A02, the N-four-bar), where a solve that cannot drop dependent rows
-/// stopped. It must pass them and follow its one-degree-of-freedom equation
-/// `(2 m L²/3 + M L²) θ̈ = −(m + M) g L sin θ`, integrated here, over 4 s (nearly four
-/// turns, eight singular passages).
+/// The hinge four-bar with a span equal to its cranks' length, spun fast enough to
+/// turn over: each time its cranks pass the horizontal, all four bars lie on one line
+/// and its constraint rows lose rank (the singular position of the IFToMM benchmark
+/// A02, the N-four-bar), where a solve that cannot drop dependent rows stopped. It must
+/// pass them and follow its one-degree-of-freedom equation ([`four_bar_k`]), integrated
+/// here, over 4 s (nearly four turns, eight singular passages).
 #[test]
 fn a_four_bar_turning_over_passes_its_singular_positions() {
-    let (m, big_m, l, spin, duration): (f64, f64, f64, f64, f64) = (1.0, 2.0, 1.0, 8.0, 4.0);
-    let span = l;
-    let crank = |id: u32, x: f64| {
-        json!({"id": id, "mass": m, "size": 0.05,
-               "inertia": [m * l * l / 12.0, m * l * l / 12.0, 1e-4],
-               "position": [x, 0, -l / 2.0], "velocity": [-spin * l / 2.0, 0, 0],
-               "angular_velocity": [0, spin, 0]})
-    };
-    let s = scenario(json!({
-        "name": "four-bar over", "seed": 1, "duration": duration, "dt": 0.001,
-        "integrator": "rk4",
-        "model": {
-            "gravity": [0, 0, -G],
-            "bodies": [
-                crank(1, 0.0), crank(2, span),
-                {"id": 3, "mass": big_m, "size": 0.05,
-                 "inertia": [1e-4, big_m * span * span / 12.0, big_m * span * span / 12.0],
-                 "position": [span / 2.0, 0, -l], "velocity": [-spin * l, 0, 0]}
-            ],
-            "joints": [
-                {"type": "hinge", "a": 1, "at": [0, 0, 0], "axis": [0, 1, 0]},
-                {"type": "hinge", "a": 2, "at": [span, 0, 0], "axis": [0, 1, 0]},
-                {"type": "hinge", "a": 1, "b": 3, "at": [0, 0, -l], "axis": [0, 1, 0]},
-                {"type": "hinge", "a": 2, "b": 3, "at": [span, 0, -l], "axis": [0, 1, 0]}
-            ]
-        }
-    }));
+    let (span, spin, duration) = (ARM, 8.0, 4.0);
+    let s = scenario(four_bar(span, spin, duration));
     // θ from the downward vertical (x = L sin θ); the cranks start down moving along
     // −x: θ̇ = −spin.
-    let inertia = 2.0 * m * l * l / 3.0 + big_m * l * l;
-    let k = (m + big_m) * G * l / inertia;
-    let h = 1e-4;
-    let rate = |y: [f64; 2]| [y[1], -k * y[0].sin()];
-    let mut y = [0.0, -spin];
-    let mut reference = vec![y[0]];
-    for step in 1..=(duration / h).round() as usize {
-        let add = |y: [f64; 2], d: [f64; 2], s: f64| [y[0] + s * d[0], y[1] + s * d[1]];
-        let k1 = rate(y);
-        let k2 = rate(add(y, k1, h / 2.0));
-        let k3 = rate(add(y, k2, h / 2.0));
-        let k4 = rate(add(y, k3, h));
-        y = [
-            y[0] + h / 6.0 * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0]),
-            y[1] + h / 6.0 * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1]),
-        ];
-        if step % 10 == 0 {
-            reference.push(y[0]);
-        }
-    }
+    let reference = pendulum_angles(four_bar_k(), (0.0, -spin), 1e-4, duration, 10);
     let (mut worst, mut singular, mut i) = (0.0f64, 0, 0);
     let mut last_z: Option<f64> = None;
     simulate(&s, |_, _, st| {
         let theta = reference[i];
-        let want = Vector3::new(span / 2.0 + l * theta.sin(), 0.0, -l * theta.cos());
+        let want = Vector3::new(span / 2.0 + ARM * theta.sin(), 0.0, -ARM * theta.cos());
         worst = worst.max((st.p[2] - want).norm());
         // A singular position: the coupler passes the pivots' height (z = 0).
         let z = st.p[2].z;
