@@ -14,12 +14,17 @@ const G: f64 = 9.81;
 /// released horizontal under gravity; with `split`, each rod on its own node, so the
 /// middle joint is a border joint.
 fn double_pendulum(split: Option<(&str, f64)>) -> Value {
+    double_pendulum_at(split, 0.001)
+}
+
+/// [`double_pendulum`] at step `dt`, its border sampled every step when split at τ = dt.
+fn double_pendulum_at(split: Option<(&str, f64)>, dt: f64) -> Value {
     let rod = |id: u32, x: f64| {
         json!({"id": id, "mass": 1.0, "size": 0.05, "inertia": [1e-3, 1.0 / 12.0, 1.0 / 12.0],
                "position": [x, 0, 0]})
     };
     let mut v = json!({
-        "name": "double", "seed": 1, "duration": 3.0, "dt": 0.001, "integrator": "rk4",
+        "name": "double", "seed": 1, "duration": 3.0, "dt": dt, "integrator": "rk4",
         "model": {
             "gravity": [0, 0, -G],
             "bodies": [rod(1, 0.5), rod(2, 1.5)],
@@ -494,6 +499,167 @@ fn a_hinge_across_a_partition_keeps_its_axes_and_the_invariants() {
             assert!(
                 e - e0 <= 0.02 && e - e0 >= -0.05,
                 "τ = {tau}: ΔKE {e} vs {e0}"
+            );
+        }
+    }
+}
+
+/// RK4's order on a partitioned joint mechanism: the double pendulum split at its
+/// middle joint, sampled every step with no latency, departs from the monolithic run at
+/// the same step by an amount that falls as dt² over 1 s under the SMC law by name, and
+/// only as dt under the default (exact) law (open, below).
+#[test]
+fn a_double_pendulum_split_at_a_joint_keeps_second_order_in_dt() {
+    for law in [Value::Null, json!({"kind": "smc"})] {
+        let mut apart = Vec::new();
+        for dt in [0.002, 0.001, 0.0005] {
+            let with = |mut v: Value| {
+                v["duration"] = json!(1.0);
+                if !law.is_null() {
+                    v["stabilizer"] = law.clone();
+                }
+                v
+            };
+            let mono = record(&with(double_pendulum_at(None, dt)));
+            let split = record(&with(double_pendulum_at(Some(("predict", dt)), dt)));
+            apart.push(farthest(&mono, &split));
+        }
+        let orders: Vec<f64> = apart.windows(2).map(|p| (p[0] / p[1]).log2()).collect();
+        eprintln!(
+            "split double pendulum ({law}): {apart:?} m from monolithic, orders {orders:.2?}"
+        );
+        // SMC keeps second order (2.00, 2.00 measured). Under the exact law a border
+        // joint's offset rows send no rate of their multipliers (with one, the split
+        // chain at rest diverged: method §2.1), so their force is held over RK4's
+        // stages and the split is first order (1.03, 1.01 measured): open. Guarded at
+        // first order so it cannot fall below it.
+        let floor = if law.is_null() { 0.9 } else { 1.8 };
+        for order in orders {
+            assert!(order >= floor, "{law}: order {order} ({apart:?})");
+        }
+    }
+}
+
+/// A border joint tells no frame apart: the shipped free chain split at a joint at
+/// 5 ms, with every body given an extra (1, −0.5, 0.3) m/s, moves relative to its
+/// centre of mass as without it, under every predicting scheme.
+#[test]
+fn a_free_chain_split_at_a_joint_moves_alike_in_every_inertial_frame() {
+    struct Relative(Vec<Vec<Vector3<f64>>>);
+    impl Observer for Relative {
+        fn on_step(&mut self, s: &StepValues) -> std::io::Result<()> {
+            let total: f64 = s.bodies.iter().map(|b| b.mass).sum();
+            let c =
+                s.p.iter()
+                    .zip(s.bodies)
+                    .map(|(p, b)| p * b.mass)
+                    .sum::<Vector3<f64>>()
+                    / total;
+            self.0.push(s.p.iter().map(|p| p - c).collect());
+            Ok(())
+        }
+    }
+    let relative = |v: &Value| {
+        let mut r = Relative(Vec::new());
+        CoSim::new(&scenario(v))
+            .run_to_end(&mut r)
+            .unwrap_or_else(|e| panic!("{e}"));
+        r.0
+    };
+    for scheme in ["predict", "passive", "tlm"] {
+        let mut v = shipped_split("free_chain5", Some(0.005));
+        v["partition"]["coupling"] = json!(scheme);
+        let rest = relative(&v);
+        for body in v["model"]["bodies"].as_array_mut().expect("bodies") {
+            let u = &mut body["velocity"];
+            *u = json!([
+                u[0].as_f64().unwrap() + 1.0,
+                u[1].as_f64().unwrap() - 0.5,
+                u[2].as_f64().unwrap() + 0.3
+            ]);
+        }
+        let moving = relative(&v);
+        let worst = rest
+            .iter()
+            .zip(&moving)
+            .flat_map(|(x, y)| x.iter().zip(y).map(|(p, q)| (p - q).norm()))
+            .fold(0.0, f64::max);
+        let moved = rest
+            .iter()
+            .map(|x| (x[0] - rest[0][0]).norm())
+            .fold(0.0, f64::max);
+        eprintln!("free chain, {scheme}: relative motion in a moving frame within {worst:.3e} m (rod 1 moved {moved:.2} m)");
+        assert!(moved > 0.1, "{scheme}: the chain barely moved");
+        assert!(worst <= 1e-9, "{scheme}: {worst} m apart");
+    }
+}
+
+/// A closed loop across a border: the hinge four-bar (two cranks on world hinges 1.5 m
+/// apart, a coupler on two more) with its cranks on node 1 and the coupler on node 2,
+/// both coupler hinges border joints: at τ = 1 ms its energy stays within 5 % of the
+/// swing's largest kinetic energy of the monolithic run's.
+#[test]
+fn a_closed_loop_split_across_a_border_keeps_its_energy() {
+    let crank = |id: u32, x: f64| {
+        json!({"id": id, "mass": 1.0, "size": 0.05, "inertia": [1.0 / 12.0, 1.0 / 12.0, 1e-4],
+               "position": [x, 0, -0.5], "velocity": [-1.0, 0, 0], "angular_velocity": [0, 2.0, 0]})
+    };
+    let scene = |tau: Option<f64>| {
+        let mut v = json!({
+            "name": "four-bar", "seed": 1, "duration": 3.0, "dt": 0.001, "integrator": "rk4",
+            "model": {
+                "gravity": [0, 0, -G],
+                "bodies": [crank(1, 0.0), crank(2, 1.5),
+                    {"id": 3, "mass": 2.0, "size": 0.05, "inertia": [1e-4, 0.375, 0.375],
+                     "position": [0.75, 0, -1], "velocity": [-2.0, 0, 0]}],
+                "joints": [
+                    {"type": "hinge", "a": 1, "at": [0, 0, 0], "axis": [0, 1, 0]},
+                    {"type": "hinge", "a": 2, "at": [1.5, 0, 0], "axis": [0, 1, 0]},
+                    {"type": "hinge", "a": 1, "b": 3, "at": [0, 0, -1], "axis": [0, 1, 0]},
+                    {"type": "hinge", "a": 2, "b": 3, "at": [1.5, 0, -1], "axis": [0, 1, 0]}
+                ]
+            }
+        });
+        if let Some(tau) = tau {
+            v["partition"] = json!({"nodes": [[1, 2], [3]]});
+            v["channels"] = json!([{"name": "border", "tau": tau}]);
+        }
+        v
+    };
+    // Total energy per step, and the kinetic energy at the start: the swing's largest,
+    // the loop starting at its lowest position.
+    struct Energy(Vec<f64>, Option<f64>);
+    impl Observer for Energy {
+        fn on_step(&mut self, s: &StepValues) -> std::io::Result<()> {
+            let potential: f64 =
+                s.p.iter()
+                    .zip(s.bodies)
+                    .map(|(p, b)| b.mass * G * p.z)
+                    .sum();
+            let kinetic = s.invariants().kinetic_energy;
+            self.1.get_or_insert(kinetic);
+            self.0.push(kinetic + potential);
+            Ok(())
+        }
+    }
+    let energy = |v: &Value| {
+        let mut e = Energy(Vec::new(), None);
+        CoSim::new(&scenario(v))
+            .run_to_end(&mut e)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let drift = e.0.iter().map(|x| (x - e.0[0]).abs()).fold(0.0, f64::max);
+        (drift, e.1.unwrap_or(0.0))
+    };
+    let (mono, swing) = energy(&scene(None));
+    for tau in [0.001, 0.005] {
+        let (drift, _) = energy(&scene(Some(tau)));
+        eprintln!("closed loop split at τ = {} ms: energy within {drift:.3e} J (monolithic {mono:.3e} J, swing {swing:.2} J)", tau * 1e3);
+        // Met at one step of delay (2.1 % measured); 5 ms moves 0.63 J, 12 % of the
+        // swing: printed, open (method §2.1).
+        if tau <= 0.001 {
+            assert!(
+                drift <= mono + 0.05 * swing,
+                "τ = {tau}: energy moved {drift} J of a {swing} J swing"
             );
         }
     }

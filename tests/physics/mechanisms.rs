@@ -148,11 +148,18 @@ fn a_heavy_top_nutates_as_eulers_equations_say_and_keeps_its_energy() {
     let (mut axes, mut worst_axis, mut worst_energy) = (Vec::new(), 0.0f64, 0.0f64);
     let mut e0 = None;
     let mut k = 0;
+    // Angular momentum about the pivot (the origin): gravity's torque there is
+    // horizontal, so its vertical part is kept and its horizontal part precesses.
+    let l0 = angular_momentum(&s, &State::initial(&s));
+    let (mut worst_lz, mut turned_l) = (0.0f64, 0.0f64);
     simulate(&s, |_, _, st| {
         let axis = UnitQuaternion::new_normalize(st.q[0]) * Vector3::z();
         worst_axis = worst_axis.max(axis.angle(&reference[k]));
         let e = energy(&s, st, G);
         worst_energy = worst_energy.max((e - *e0.get_or_insert(e)).abs());
+        let l = angular_momentum(&s, st);
+        worst_lz = worst_lz.max((l.z - l0.z).abs() / l0.norm());
+        turned_l = turned_l.max((l.xy() - l0.xy()).norm() / l0.norm());
         axes.push(axis);
         k += 1;
     });
@@ -171,6 +178,12 @@ fn a_heavy_top_nutates_as_eulers_equations_say_and_keeps_its_energy() {
         "nutation {got} rad vs {want} rad"
     );
     assert!(worst_energy < 0.05, "energy moved by {worst_energy} J");
+    eprintln!(
+        "heavy top: vertical angular momentum about the pivot within {worst_lz:.3e} of |L|, \
+         its horizontal part turned by up to {turned_l:.2} of |L|"
+    );
+    assert!(turned_l > 0.5, "the top did not precess ({turned_l})");
+    assert!(worst_lz < 1e-6, "L_z moved by {worst_lz} of |L|");
     // Both ways: the axis is the reference's, not merely a top of the same amplitude.
     assert!(worst_axis < 1e-3, "axis {worst_axis} rad off the reference");
 }
