@@ -276,6 +276,10 @@ pub(crate) struct RowKinematics {
     pub rb: Vector3<f64>,
     /// An alignment row's `ċ` with the bodies' ω held (zero for the other rows).
     pub c_dot: Vector3<f64>,
+    /// A slide row's `ṅ` (its normal turns with `b`) and `ċ_b` (zero for the other
+    /// rows).
+    pub n_dot: Vector3<f64>,
+    pub cb_dot: Vector3<f64>,
     /// For a distance row: the anchors' distance `d` (1 for the other rows).
     pub d: f64,
 }
@@ -315,6 +319,8 @@ pub(crate) fn row_kinematics(link: &Link, state: &State, rigid: bool) -> RowKine
             ra: zero,
             rb: zero,
             c_dot,
+            n_dot: zero,
+            cb_dot: zero,
             d: 1.0,
         };
     }
@@ -342,12 +348,34 @@ pub(crate) fn row_kinematics(link: &Link, state: &State, rigid: bool) -> RowKine
         // The anchors' centripetal accelerations' difference.
         spin = wa.cross(&wa.cross(&ra)) - wb.cross(&wb.cross(&rb));
     }
-    let (w, wd, mut jdv, n, d) = match link.kind {
+    // A slide row's normal turns with `b` (a world row's stays): `ṅ = ω_b × n`, and
+    // `w = n · d` adds `ṅ · d` to `ẇ` and `n̈ · d + 2 ṅ · ḋ` to `J̇ v`.
+    let (mut slide_cb, mut n_dot, mut cb_dot) = (None, zero, zero);
+    let (w, wd, mut jdv, n, d) = match &link.kind {
         RowKind::Offset(k) => {
-            let k = usize::from(k);
+            let k = usize::from(*k);
             let mut n = zero;
             n[k] = 1.0;
             (delta[k], u[k], spin[k], n, 1.0)
+        }
+        RowKind::Slide(normal) => {
+            let (n, wb) = if link.world {
+                (**normal, zero)
+            } else {
+                (rotation(b) * **normal, state.omega[b])
+            };
+            n_dot = wb.cross(&n);
+            // `b`'s angular Jacobian: the force acts at `a`'s anchor, `R_b r_b + d` from
+            // `b`'s centre.
+            slide_cb = Some((rb + delta).cross(&n));
+            cb_dot = (wb.cross(&rb) + u).cross(&n) + (rb + delta).cross(&n_dot);
+            (
+                n.dot(&delta),
+                n_dot.dot(&delta) + n.dot(&u),
+                wb.cross(&n_dot).dot(&delta) + 2.0 * n_dot.dot(&u) + n.dot(&spin),
+                n,
+                1.0,
+            )
         }
         _ => {
             let d = delta.norm();
@@ -362,7 +390,7 @@ pub(crate) fn row_kinematics(link: &Link, state: &State, rigid: bool) -> RowKine
             jdv += n.dot(&spin);
         }
         ca = ra.cross(&n);
-        cb = rb.cross(&n);
+        cb = slide_cb.unwrap_or_else(|| rb.cross(&n));
     }
     RowKinematics {
         w,
@@ -374,6 +402,8 @@ pub(crate) fn row_kinematics(link: &Link, state: &State, rigid: bool) -> RowKine
         ra,
         rb,
         c_dot: zero,
+        n_dot,
+        cb_dot,
         d,
     }
 }

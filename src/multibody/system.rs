@@ -532,6 +532,11 @@ impl System {
         // turn with their bodies (the world's side does not turn).
         let (ca_dot, cb_dot) = match &link.kind {
             RowKind::Align(_) => (row.c_dot, row.c_dot),
+            // A slide row's normal turns with `b`, and with it both levers.
+            RowKind::Slide(_) => (
+                state.omega[link.a].cross(&row.ra).cross(&row.n) + row.ra.cross(&row.n_dot),
+                row.cb_dot,
+            ),
             _ => {
                 let wb = if link.world {
                     Vector3::zeros()
@@ -544,18 +549,19 @@ impl System {
                 )
             }
         };
+        // Only a slide row's normal turns (the others' `ṅ` is zero: not added, so a
+        // zero's sign stays as it was).
+        let f_dot = match &link.kind {
+            RowKind::Slide(_) => row.n_dot * z + row.n * z_dot,
+            _ => row.n * z_dot,
+        };
         if body == link.a {
-            [
-                row.n * z,
-                row.ca * z,
-                row.n * z_dot,
-                ca_dot * z + row.ca * z_dot,
-            ]
+            [row.n * z, row.ca * z, f_dot, ca_dot * z + row.ca * z_dot]
         } else {
             [
                 -row.n * z,
                 -row.cb * z,
-                -row.n * z_dot,
+                -f_dot,
                 -(cb_dot * z + row.cb * z_dot),
             ]
         }

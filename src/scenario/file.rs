@@ -473,13 +473,16 @@ pub enum JointTypeFile {
     Hinge,
     /// The bodies move as one (6 rows).
     Weld,
+    /// Body `a` slides along `axis`, fixed in body `b` (or the world), neither body
+    /// turning against the other (5 rows).
+    Prismatic,
 }
 
 /// One entry of `model.joints`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct JointFile {
-    /// `"ball"`, `"hinge"` or `"weld"`.
+    /// `"ball"`, `"hinge"`, `"weld"` or `"prismatic"`.
     #[serde(rename = "type")]
     pub kind: JointTypeFile,
     /// Id of body `a`.
@@ -495,8 +498,9 @@ pub struct JointFile {
     /// The joint's point in world coordinates at t = 0 [m]; required. Each body's
     /// anchor is this point in its own frame, so the scene starts on the joint.
     pub at: [f64; 3],
-    /// `hinge`: the axis the bodies turn about, a world direction at t = 0 (any
-    /// length but zero); required for a hinge, refused otherwise.
+    /// `hinge`: the axis the bodies turn about; `prismatic`: the axis `a` slides along
+    /// (fixed in `b`, or in the world). A world direction at t = 0 (any length but
+    /// zero); required for a hinge or a prismatic joint, refused otherwise.
     #[serde(
         default,
         deserialize_with = "present",

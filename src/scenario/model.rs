@@ -188,6 +188,10 @@ pub enum RowKind {
     /// (on a world row `v` is a world vector): zero while they stay perpendicular. A
     /// hinge keeps its axis `u` perpendicular to two vectors normal to the axis on `b`.
     Align(Box<AlignAxes>),
+    /// `w = (R_b n) · d` [m] for a unit vector `n` in `b`'s frame (on a world row a world
+    /// vector): `a`'s anchor stays on the line through `b`'s anchor normal to `n`. A
+    /// prismatic joint's two rows, `n` normal to its axis, keep `a` on the axis.
+    Slide(Box<Vector3<f64>>),
 }
 
 /// The two body-frame vectors of a [`RowKind::Align`] row.
@@ -208,6 +212,9 @@ pub enum JointType {
     Hinge,
     /// A ball joint whose bodies keep their relative orientation (6 rows).
     Weld,
+    /// Bodies that keep their relative orientation while `a` slides along an axis
+    /// fixed in `b` (or the world): 5 rows.
+    Prismatic,
 }
 
 impl JointType {
@@ -217,6 +224,7 @@ impl JointType {
             JointType::Ball => 3,
             JointType::Hinge => 5,
             JointType::Weld => 6,
+            JointType::Prismatic => 5,
         }
     }
 }

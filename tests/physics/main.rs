@@ -5,12 +5,14 @@
 use dsmcosim::kernel::SimTime;
 use dsmcosim::multibody::{State, System};
 use dsmcosim::scenario::{parse_str, Scenario};
-use nalgebra::{UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 use serde_json::{json, Value};
 
+mod iftomm;
 mod joints;
 mod loads;
 mod mechanisms;
+mod prismatic;
 mod springs;
 
 /// Complete elliptic integral of the first kind K(k), by the arithmetic-geometric
@@ -21,6 +23,88 @@ fn elliptic_k(k: f64) -> f64 {
         (a, b) = ((a + b) / 2.0, (a * b).sqrt());
     }
     std::f64::consts::PI / (2.0 * a)
+}
+
+/// A shipped scenario (`name` under `scenarios/`, without `.json`) on one node: without
+/// its partition, channels and output sections.
+fn shipped(name: &str) -> Value {
+    let path = format!("{}/scenarios/{name}.json", env!("CARGO_MANIFEST_DIR"));
+    let mut v: Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).expect("shipped")).expect("JSON");
+    for key in ["partition", "channels", "output"] {
+        v.as_object_mut().expect("object").remove(key);
+    }
+    v
+}
+
+/// Kinetic energy of every body of `s` in `st` [J].
+fn kinetic_energy(s: &Scenario, st: &State) -> f64 {
+    s.bodies
+        .iter()
+        .enumerate()
+        .map(|(i, b)| {
+            let r = UnitQuaternion::new_normalize(st.q[i]).to_rotation_matrix();
+            let inertia = r.matrix() * Matrix3::from_diagonal(&b.inertia) * r.matrix().transpose();
+            0.5 * b.mass * st.v[i].norm_squared() + 0.5 * st.omega[i].dot(&(inertia * st.omega[i]))
+        })
+        .sum()
+}
+
+/// Potential energy of every body of `s` in `st` in uniform `gravity` [J], zero at the
+/// origin.
+fn potential_energy(s: &Scenario, st: &State, gravity: Vector3<f64>) -> f64 {
+    s.bodies
+        .iter()
+        .enumerate()
+        .map(|(i, b)| -b.mass * gravity.dot(&st.p[i]))
+        .sum()
+}
+
+/// Total angular momentum about the origin [kg·m²/s].
+fn angular_momentum(s: &Scenario, st: &State) -> Vector3<f64> {
+    s.bodies
+        .iter()
+        .enumerate()
+        .map(|(i, b)| {
+            let r = UnitQuaternion::new_normalize(st.q[i]).to_rotation_matrix();
+            let inertia = r.matrix() * Matrix3::from_diagonal(&b.inertia) * r.matrix().transpose();
+            st.p[i].cross(&st.v[i]) * b.mass + inertia * st.omega[i]
+        })
+        .sum()
+}
+
+/// Kinetic plus potential energy [J] ([`kinetic_energy`], [`potential_energy`]).
+fn mechanical_energy(s: &Scenario, st: &State, gravity: Vector3<f64>) -> f64 {
+    kinetic_energy(s, st) + potential_energy(s, st, gravity)
+}
+
+/// `θ` of `θ̈ = −k sin θ` from `θ(0) = theta0`, `θ̇(0) = rate0`, integrated here by RK4
+/// at `h` over `duration` and sampled every `every` steps.
+fn pendulum_angles(
+    k: f64,
+    (theta0, rate0): (f64, f64),
+    h: f64,
+    duration: f64,
+    every: usize,
+) -> Vec<f64> {
+    let rate = |y: [f64; 2]| [y[1], -k * y[0].sin()];
+    let add = |y: [f64; 2], d: [f64; 2], s: f64| [y[0] + s * d[0], y[1] + s * d[1]];
+    let mut y = [theta0, rate0];
+    let mut out = vec![y[0]];
+    for step in 1..=(duration / h).round() as usize {
+        let k1 = rate(y);
+        let k2 = rate(add(y, k1, h / 2.0));
+        let k3 = rate(add(y, k2, h / 2.0));
+        let k4 = rate(add(y, k3, h));
+        y = [
+            y[0] + h / 6.0 * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0]),
+            y[1] + h / 6.0 * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1]),
+        ];
+        if step % every == 0 {
+            out.push(y[0]);
+        }
+    }
+    out
 }
 
 fn scenario(v: Value) -> Scenario {

@@ -8,39 +8,18 @@ use std::f64::consts::PI;
 
 use dsmcosim::multibody::State;
 use dsmcosim::scenario::model::Stabilizer;
-use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use serde_json::{json, Value};
 
-use super::{elliptic_k, scenario, simulate};
+use super::{
+    angular_momentum, elliptic_k, mechanical_energy, pendulum_angles, scenario, shipped, simulate,
+};
 
 const G: f64 = 9.81;
 
 /// Kinetic plus potential energy of every body of `s` in `st` [J], gravity along −z.
 fn energy(s: &dsmcosim::scenario::Scenario, st: &State, g: f64) -> f64 {
-    s.bodies
-        .iter()
-        .enumerate()
-        .map(|(i, b)| {
-            let r = UnitQuaternion::new_normalize(st.q[i]).to_rotation_matrix();
-            let inertia = r.matrix() * Matrix3::from_diagonal(&b.inertia) * r.matrix().transpose();
-            0.5 * b.mass * st.v[i].norm_squared()
-                + 0.5 * st.omega[i].dot(&(inertia * st.omega[i]))
-                + b.mass * g * st.p[i].z
-        })
-        .sum()
-}
-
-/// Total angular momentum about the origin [kg·m²/s].
-fn angular_momentum(s: &dsmcosim::scenario::Scenario, st: &State) -> Vector3<f64> {
-    s.bodies
-        .iter()
-        .enumerate()
-        .map(|(i, b)| {
-            let r = UnitQuaternion::new_normalize(st.q[i]).to_rotation_matrix();
-            let inertia = r.matrix() * Matrix3::from_diagonal(&b.inertia) * r.matrix().transpose();
-            st.p[i].cross(&st.v[i]) * b.mass + inertia * st.omega[i]
-        })
-        .sum()
+    mechanical_energy(s, st, Vector3::new(0.0, 0.0, -g))
 }
 
 // The heavy symmetric top: 1 kg, principal inertia 0.01 / 0.01 / 0.02 kg·m² about its
@@ -241,15 +220,7 @@ fn a_conical_pendulum_keeps_its_cone_and_its_closed_form_period() {
 fn a_free_chain_on_ball_joints_keeps_momentum_angular_momentum_and_energy() {
     // The shipped chain (its velocities built so every joint's two anchors move alike),
     // on one node, for 5 s.
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/scenarios/mechanisms/free_chain5.json"
-    );
-    let mut v: Value =
-        serde_json::from_str(&std::fs::read_to_string(path).expect("shipped")).expect("JSON");
-    for key in ["partition", "channels", "output"] {
-        v.as_object_mut().expect("object").remove(key);
-    }
+    let mut v = shipped("mechanisms/free_chain5");
     v["duration"] = json!(5.0);
     let s = scenario(v);
     let n = s.bodies.len();
@@ -281,35 +252,6 @@ fn a_free_chain_on_ball_joints_keeps_momentum_angular_momentum_and_energy() {
     // An ideal joint does no work and leaves no couple: both to the integrator's
     // truncation, far inside the targets above.
     assert!(dl < 1e-6 && de < 1e-6, "ΔL {dl}, ΔKE {de}");
-}
-
-/// `θ` of `θ̈ = −k sin θ` from `θ(0) = theta0`, `θ̇(0) = rate0`, integrated here by RK4
-/// at `h` over `duration` and sampled every `every` steps.
-fn pendulum_angles(
-    k: f64,
-    (theta0, rate0): (f64, f64),
-    h: f64,
-    duration: f64,
-    every: usize,
-) -> Vec<f64> {
-    let rate = |y: [f64; 2]| [y[1], -k * y[0].sin()];
-    let add = |y: [f64; 2], d: [f64; 2], s: f64| [y[0] + s * d[0], y[1] + s * d[1]];
-    let mut y = [theta0, rate0];
-    let mut out = vec![y[0]];
-    for step in 1..=(duration / h).round() as usize {
-        let k1 = rate(y);
-        let k2 = rate(add(y, k1, h / 2.0));
-        let k3 = rate(add(y, k2, h / 2.0));
-        let k4 = rate(add(y, k3, h));
-        y = [
-            y[0] + h / 6.0 * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0]),
-            y[1] + h / 6.0 * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1]),
-        ];
-        if step % every == 0 {
-            out.push(y[0]);
-        }
-    }
-    out
 }
 
 // The four-bars: two 1 kg, 1 m cranks on world hinges `span` apart carrying a 2 kg

@@ -15,7 +15,7 @@ pub const MAX_JOINTS: usize = 100_000;
 
 /// The rows of every joint, in joint order, each joint's rows in the order of
 /// [`JointType`]: the three offsets (x, y, z), then a hinge's two or a weld's three
-/// alignments.
+/// alignments; a prismatic joint's two slides, then its three alignments.
 pub(super) fn joint_rows(
     joints: &[JointFile],
     ids: &Ids,
@@ -67,6 +67,7 @@ pub fn joint_type(kind: JointTypeFile) -> JointType {
         JointTypeFile::Ball => JointType::Ball,
         JointTypeFile::Hinge => JointType::Hinge,
         JointTypeFile::Weld => JointType::Weld,
+        JointTypeFile::Prismatic => JointType::Prismatic,
     }
 }
 
@@ -93,14 +94,19 @@ fn joint(
     };
     let at = magnitude_vector(&format!("{path}.at"), f.at)?;
     let kind = joint_type(f.kind);
-    let axis = match (kind, f.axis) {
-        (JointType::Hinge, None) => {
+    let axial = matches!(kind, JointType::Hinge | JointType::Prismatic);
+    let axis = match (axial, f.axis) {
+        (true, None) => {
             return Err(Error::invalid(
                 format!("{path}.axis"),
-                "a hinge needs the world direction it turns about, e.g. [0, 0, 1]",
+                if kind == JointType::Hinge {
+                    "a hinge needs the world direction it turns about, e.g. [0, 0, 1]"
+                } else {
+                    "a prismatic joint needs the world direction it slides along, e.g. [1, 0, 0]"
+                },
             ))
         }
-        (JointType::Hinge, Some(axis)) => {
+        (true, Some(axis)) => {
             let v = magnitude_vector(&format!("{path}.axis"), axis)?;
             let n = v.norm();
             if !(n > 0.0 && n.is_finite()) {
@@ -111,13 +117,14 @@ fn joint(
             }
             Some(v / n)
         }
-        (_, Some(_)) => {
+        (false, Some(_)) => {
             return Err(Error::invalid(
                 format!("{path}.axis"),
-                "only a hinge has an axis (a ball turns freely, a weld not at all)",
+                "only a hinge or a prismatic joint has an axis (a ball turns freely, a weld \
+                 not at all)",
             ))
         }
-        (_, None) => None,
+        (false, None) => None,
     };
     // Each side's anchor: the joint point in its frame (the world point itself).
     let frame = |i: usize| -> (Vector3<f64>, UnitQuaternion<f64>) {
@@ -144,9 +151,23 @@ fn joint(
         world: b.is_none(),
         joint: Some((j as u32, r as u32)),
     };
-    let mut rows: Vec<LinkSpec> = (0..3u8)
-        .map(|k| row(usize::from(k), RowKind::Offset(k)))
-        .collect();
+    // A prismatic joint's first two rows hold `a`'s anchor on the axis through `b`'s
+    // (normal offsets in `b`'s frame); every other joint's first three make the
+    // anchors coincide.
+    let mut rows: Vec<LinkSpec> = match (kind, axis) {
+        (JointType::Prismatic, Some(axis)) => {
+            let (p1, p2) = normals(&axis);
+            [p1, p2]
+                .into_iter()
+                .enumerate()
+                .map(|(k, n)| row(k, RowKind::Slide(Box::new(in_b(n)))))
+                .collect()
+        }
+        _ => (0..3u8)
+            .map(|k| row(usize::from(k), RowKind::Offset(k)))
+            .collect(),
+    };
+    let first = rows.len();
     let e = [Vector3::x(), Vector3::y(), Vector3::z()];
     let pairs: Vec<(Vector3<f64>, Vector3<f64>)> = match (kind, axis) {
         (JointType::Hinge, Some(axis)) => {
@@ -155,12 +176,14 @@ fn joint(
         }
         // x·y, y·z, z·x of the two frames as they are at t = 0: each is first-order
         // in the relative turn about z, x and y.
-        (JointType::Weld, _) => vec![(e[0], e[1]), (e[1], e[2]), (e[2], e[0])],
+        (JointType::Weld | JointType::Prismatic, _) => {
+            vec![(e[0], e[1]), (e[1], e[2]), (e[2], e[0])]
+        }
         _ => Vec::new(),
     };
     for (k, (u, v)) in pairs.into_iter().enumerate() {
         rows.push(row(
-            3 + k,
+            first + k,
             RowKind::Align(Box::new(AlignAxes {
                 u: ra.inverse() * u,
                 v: in_b(v),
