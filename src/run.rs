@@ -274,6 +274,7 @@ fn drive(
     let every = options.checkpoint_every.filter(|e| e.0 > 0);
     let next_multiple = |t: SimTime, e: SimTime| SimTime((t.0 / e.0 + 1).saturating_mul(e.0));
     let mut next_cp = every.map(|e| next_multiple(t, e));
+    let mut last_cp: Option<std::path::PathBuf> = None;
     while t < end {
         let target = next_cp.unwrap_or(end).min(end);
         match controller.as_deref_mut() {
@@ -286,14 +287,20 @@ fn drive(
                     t = SimTime(t.0.saturating_add(slice.0)).min(target);
                     world.advance_to(t, recorder)?;
                     progress.tick(world.steps_done());
-                    interrupted(out, t, end, every)?;
+                    interrupted(out, t, end, (last_cp.as_deref(), next_cp))?;
                 }
             }
         }
-        interrupted(out, t, end, every)?;
+        interrupted(out, t, end, (last_cp.as_deref(), next_cp))?;
         if let (Some(e), Some(cp)) = (every, next_cp) {
             if t < end {
-                crate::checkpoint::write(out, t, world, recorder, controller.as_deref())?;
+                last_cp = Some(crate::checkpoint::write(
+                    out,
+                    t,
+                    world,
+                    recorder,
+                    controller.as_deref(),
+                )?);
             }
             next_cp = Some(next_multiple(t, e).max(SimTime(cp.0.saturating_add(e.0))));
         }
@@ -304,20 +311,30 @@ fn drive(
 }
 
 /// The error of a run stopped by Ctrl-C or SIGTERM at `t` (see [`crate::interrupt`]),
-/// with the way to continue: the last checkpoint when the run writes them, else the
-/// option that makes it write them.
-fn interrupted(out: &Path, t: SimTime, end: SimTime, every: Option<SimTime>) -> Result<()> {
+/// with the way to continue: the last checkpoint written (`checkpoints.0`), else when the
+/// first is due (`checkpoints.1`, on a run that writes them), else the option that makes
+/// a run write them.
+fn interrupted(
+    out: &Path,
+    t: SimTime,
+    end: SimTime,
+    checkpoints: (Option<&Path>, Option<SimTime>),
+) -> Result<()> {
     if !crate::interrupt::requested() || t >= end {
         return Ok(());
     }
-    let hint = match every {
-        Some(_) => format!(
-            "continue from the last checkpoint with `dsmcosim resume {}/checkpoints/t_….ckpt -o {}`",
-            out.display(),
+    let hint = match checkpoints {
+        (Some(last), _) => format!(
+            "continue from the last checkpoint with `dsmcosim resume {} -o {}`",
+            last.display(),
             out.display()
         ),
-        None => "a rerun starts from t = 0; `--checkpoint-every S` writes checkpoints that \
-                 `dsmcosim resume` continues from"
+        (None, Some(first)) => format!(
+            "no checkpoint was written yet (the first was due at t = {first}), so a rerun \
+             starts from t = 0"
+        ),
+        (None, None) => "a rerun starts from t = 0; `--checkpoint-every S` writes checkpoints \
+                         that `dsmcosim resume` continues from"
             .to_string(),
     };
     Err(Error::Interrupted { at: t, end, hint })

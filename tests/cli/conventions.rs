@@ -200,17 +200,14 @@ fn a_file_of_the_other_kind_or_a_mistyped_key_gets_a_pointer_to_the_fix() {
     assert!(both.contains("store one with `dsmcosim run"), "{both}");
 }
 
-#[test]
-fn ctrl_c_stops_a_run_cleanly_and_says_how_to_continue() {
-    // A run of 3000 s of simulated time of a net at rest (about a minute of wall
-    // time): SIGINT once it
-    // has claimed its directory. It stops at the end of its slice, writes what it has
-    // (summary.json "interrupted", no temporary file left), exits 130 and names the
-    // option that makes a run resumable. Guarded against a hang only (300 s).
-    let dir = scratch("conventions_ctrl_c");
+/// A run of 3000 s of simulated time of a net at rest (about a minute of wall time),
+/// with `extra` arguments, sent SIGINT once it has claimed its directory and run 0.3 s
+/// more: what it said, and its directory. Guarded against a hang only (300 s).
+fn interrupted_run(name: &str, extra: &[&str]) -> (std::process::Output, std::path::PathBuf) {
+    let dir = scratch(name);
     let out = dir.join("out");
     let scenario = repo().join("scenarios/grid16_monolithic.json");
-    let child = std::process::Command::new(env!("CARGO_BIN_EXE_dsmcosim"))
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_dsmcosim"))
         .args([
             "run",
             scenario.to_str().unwrap(),
@@ -224,6 +221,7 @@ fn ctrl_c_stops_a_run_cleanly_and_says_how_to_continue() {
             "--set",
             "/forces=[]",
         ])
+        .args(extra)
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::piped())
         .spawn()
@@ -233,13 +231,24 @@ fn ctrl_c_stops_a_run_cleanly_and_says_how_to_continue() {
     while !out.join("trace.csv").exists() && !has_temporary(&out) {
         polls += 1;
         assert!(polls < 15_000, "the run never started");
+        if let Some(status) = child.try_wait().expect("try_wait") {
+            panic!("the run ended ({status}) before it was interrupted");
+        }
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
     std::thread::sleep(std::time::Duration::from_millis(300));
     // SAFETY: kill(2) on the child's pid, which has not been waited for.
     let rc = unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGINT) };
     assert_eq!(rc, 0);
-    let o = child.wait_with_output().expect("wait");
+    (child.wait_with_output().expect("wait"), out)
+}
+
+#[test]
+fn ctrl_c_stops_a_run_cleanly_and_says_how_to_continue() {
+    // It stops at the end of its slice, writes what it has (summary.json
+    // "interrupted", no temporary file left), exits 130 and names the option that
+    // makes a run resumable.
+    let (o, out) = interrupted_run("conventions_ctrl_c", &[]);
     assert_eq!(o.status.code(), Some(130), "{}", said(&o));
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(
@@ -251,6 +260,39 @@ fn ctrl_c_stops_a_run_cleanly_and_says_how_to_continue() {
         !has_temporary(&out),
         "a temporary file was left in {}",
         out.display()
+    );
+}
+
+/// With checkpoints, the hint names the last one written, a file that exists, and the
+/// command it gives continues the run; before the first is due, it says there is none.
+#[test]
+fn ctrl_c_names_the_checkpoint_a_run_continues_from() {
+    let (o, out) = interrupted_run("conventions_ctrl_c_cp", &["--checkpoint-every", "5"]);
+    assert_eq!(o.status.code(), Some(130), "{}", said(&o));
+    let e = String::from_utf8_lossy(&o.stderr);
+    let command = e
+        .split('`')
+        .find(|part| part.starts_with("dsmcosim resume "))
+        .unwrap_or_else(|| panic!("no resume command in: {e}"));
+    let checkpoint = command
+        .split_whitespace()
+        .nth(2)
+        .expect("a checkpoint path");
+    assert!(
+        std::path::Path::new(checkpoint).is_file(),
+        "the hint names {checkpoint}, which does not exist: {e}"
+    );
+    assert!(
+        std::path::Path::new(checkpoint).starts_with(out.join("checkpoints")),
+        "{e}"
+    );
+
+    let (o, _) = interrupted_run("conventions_ctrl_c_nocp", &["--checkpoint-every", "1000"]);
+    assert_eq!(o.status.code(), Some(130), "{}", said(&o));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("no checkpoint was written yet (the first was due at t = 1000.000000000 s)"),
+        "{e}"
     );
 }
 
