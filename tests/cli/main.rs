@@ -12,6 +12,7 @@ mod conventions;
 mod corpus;
 #[path = "../support/fmu_build.rs"]
 mod fmu_build;
+mod front_page;
 mod limits;
 mod outputs;
 mod overrides;
