@@ -143,6 +143,20 @@ pub fn sibling(dir: &Path) -> Result<PathBuf> {
 pub fn rerun(scenario: &Scenario, out: &Path) -> Result<RunSummary> {
     match crate::run::run(scenario, out) {
         Ok(_) | Err(Error::Diverged(_)) | Err(Error::Numerical { .. }) => read_summary(out),
+        // `run`'s refusal of a directory holding another scenario's run names `run`'s
+        // options; `check` has neither `--out` nor `--force`.
+        Err(Error::Invalid { path, message }) if path == "--out" => Err(Error::invalid(
+            out.display().to_string(),
+            format!(
+                "{} (the rerun's directory: an earlier check's? remove it, or give \
+                 `--work DIR` to rerun elsewhere)",
+                message
+                    .split(" (choose another directory")
+                    .next()
+                    .unwrap_or(&message)
+                    .trim_start_matches(&format!("{} ", out.display()))
+            ),
+        )),
         Err(e) => Err(e),
     }
 }

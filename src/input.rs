@@ -26,6 +26,20 @@ pub const DEFAULT_MAX_MEMORY_BYTES: u64 = 16_000_000_000;
 /// The bytes of the file at `path`, at most `cap` of them: a longer file (or an endless
 /// stream) is refused after `cap + 1` bytes, naming the path and the cap.
 pub fn read_capped(path: &Path, cap: u64) -> Result<Vec<u8>> {
+    if path.is_dir() {
+        let hint = if path.join("scenario.json").is_file() {
+            format!(
+                " (a run's folder keeps its scenario as {})",
+                path.join("scenario.json").display()
+            )
+        } else {
+            String::new()
+        };
+        return Err(Error::invalid(
+            path.display().to_string(),
+            format!("is a directory, not a file{hint}"),
+        ));
+    }
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     let mut bytes = Vec::new();
     file.take(cap.saturating_add(1))

@@ -161,7 +161,17 @@ impl Pointer {
                 &here_text
             };
             let what = match here_value {
-                Value::Object(_) => format!("no key `{token}` in {here}"),
+                Value::Object(map) => {
+                    // The nearest key there, when one is close (the rule of the
+                    // scenario's unknown fields: at most a third of its letters differ).
+                    let near = map
+                        .keys()
+                        .map(|k| (strsim::damerau_levenshtein(token, k), k))
+                        .min()
+                        .filter(|(d, k)| *d <= (k.chars().count() / 3).max(1))
+                        .map_or(String::new(), |(_, k)| format!(" (did you mean `{k}`?)"));
+                    format!("no key `{token}` in {here}{near}")
+                }
                 Value::Array(items) => format!(
                     "no element `{token}` in {here} (an array of {})",
                     items.len()
@@ -229,7 +239,16 @@ mod tests {
             .unwrap()
             .set(&mut doc, json!(1))
             .unwrap_err();
-        assert!(e.contains("no key `nosuch` in the top level"), "{e}");
+        assert!(e.contains("no key `nosuch` in the top level,"), "{e}");
+        // A mistyped key gets the nearest one.
+        let e = Pointer::parse("/chanels/0/tau")
+            .unwrap()
+            .set(&mut doc, json!(1))
+            .unwrap_err();
+        assert!(
+            e.contains("no key `chanels` in the top level (did you mean `channels`?), so"),
+            "{e}"
+        );
         let e = Pointer::parse("/channels/0")
             .unwrap()
             .set(&mut doc, json!(1))

@@ -118,12 +118,38 @@ pub fn parse_file(text: &str, file_label: &str) -> Result<ScenarioFile> {
     let mut de = serde_json::Deserializer::from_str(text);
     let file: ScenarioFile = serde_path_to_error::deserialize(&mut de).map_err(|e| {
         let path = e.path().to_string();
-        serde_error(e.inner(), &path, file_label, text)
+        match other_kind(text) {
+            Some(kind) => Error::invalid(file_label, kind),
+            _ => serde_error(e.inner(), &path, file_label, text),
+        }
     })?;
     // Anything but whitespace after the top-level object is a syntax error.
     de.end()
         .map_err(|e| serde_error(&e, ".", file_label, text))?;
     Ok(file)
+}
+
+/// What a JSON file that is not a scenario but another of dsmcosim's files is, and what
+/// to do with it, when its top-level keys say so: a sweep file, a run's `summary.json`, a
+/// sweep point's `done.json`.
+fn other_kind(text: &str) -> Option<&'static str> {
+    let v: serde_json::Value = serde_json::from_str(text).ok()?;
+    let has = |k: &str| v.get(k).is_some();
+    if has("base") && (has("axes") || has("overrides")) {
+        Some("is a sweep file (it has `base` and `axes`), not a scenario: run its points with `dsmcosim sweep FILE -o DIR`")
+    } else if has("digest") && has("scenario") && has("status") {
+        Some(
+            "is a run's summary.json, not a scenario: the run's scenario is the \
+             scenario.json beside it",
+        )
+    } else if has("scenario_digest") && has("base_digest") {
+        Some(
+            "is a sweep point's done.json, not a scenario: the point's scenario is the \
+             scenario.json beside it",
+        )
+    } else {
+        None
+    }
 }
 
 /// Maps a serde_json error at field `path` (serde_path_to_error's form; `.` = the top

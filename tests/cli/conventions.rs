@@ -5,7 +5,7 @@
 
 use serde_json::json;
 
-use super::{repo, run, said, scratch, shipped, summary, write_json};
+use super::{bin, repo, run, said, scratch, shipped, summary, write_json};
 
 #[test]
 fn version_names_the_commit_and_the_compiler() {
@@ -392,4 +392,85 @@ fn max_memory_takes_sizes_with_units() {
             said(&o)
         );
     }
+}
+
+/// A file of another kind given where a scenario belongs is named for what it is, with
+/// what to do instead; a check whose rerun directory holds another scenario's run says
+/// so in `check`'s own terms (it has no `--out` or `--force`). Each exits 2 and writes
+/// nothing.
+#[test]
+fn a_file_of_another_kind_is_named_for_what_it_is() {
+    let dir = scratch("conventions_other_kinds");
+    let stored = repo().join("results/grid16_space_cp");
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (
+            vec![
+                "check".into(),
+                "scenarios/sweeps/tdma4_slot_layouts.json".into(),
+                "--against".into(),
+                dir.join("none").display().to_string(),
+            ],
+            "is a sweep file (it has `base` and `axes`), not a scenario: run its points with \
+             `dsmcosim sweep FILE -o DIR`",
+        ),
+        (
+            vec![
+                "run".into(),
+                stored.join("summary.json").display().to_string(),
+                "-o".into(),
+                dir.join("a").display().to_string(),
+            ],
+            "is a run's summary.json, not a scenario: the run's scenario is the scenario.json \
+             beside it",
+        ),
+        (
+            vec![
+                "run".into(),
+                stored.display().to_string(),
+                "-o".into(),
+                dir.join("b").display().to_string(),
+            ],
+            "is a directory, not a file (a run's folder keeps its scenario as",
+        ),
+    ];
+    for (args, want) in cases {
+        let o = bin()
+            .current_dir(repo())
+            .args(&args)
+            .output()
+            .expect("spawn");
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", said(&o));
+        assert!(e.contains(want), "{args:?}: {e}");
+    }
+    for made in ["a", "b"] {
+        assert!(!dir.join(made).exists(), "{made} was written");
+    }
+    // A check whose `<stored>.new` holds another scenario's run.
+    let other = dir.join("other");
+    for d in [&other, &dir.join("other.new")] {
+        std::fs::create_dir_all(d).expect("mkdir");
+        for f in ["summary.json", "trace.csv", "epochs.csv"] {
+            std::fs::copy(repo().join("results/grid16_space_fixed").join(f), d.join(f))
+                .expect("copy");
+        }
+    }
+    let o = run(&[
+        "check",
+        repo()
+            .join("scenarios/grid16_space_cp.json")
+            .to_str()
+            .unwrap(),
+        "--against",
+        other.to_str().unwrap(),
+    ]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains(
+            "holds a run of scenario `grid16_space_fixed`, not `grid16_space_cp` (the \
+                    rerun's directory: an earlier check's? remove it, or give `--work DIR`"
+        ),
+        "{e}"
+    );
+    assert!(!e.contains("--force"), "{e}");
 }
