@@ -216,7 +216,13 @@ struct PyCoSim {
 /// Simulated time [s] as the kernel's nanoseconds, or an error naming `what`.
 fn sim_time(what: &str, seconds: f64) -> dsmcosim::Result<SimTime> {
     SimTime::from_secs_f64(seconds).ok_or_else(|| {
-        dsmcosim::Error::invalid(what, format!("must be a time ≥ 0 s (got {seconds})"))
+        dsmcosim::Error::invalid(
+            what,
+            format!(
+                "must be a time ≥ 0 s (got {})",
+                dsmcosim::error::num(seconds)
+            ),
+        )
     })
 }
 

@@ -235,6 +235,10 @@ def test_steering_errors_name_what_is_wrong():
     with pytest.raises(dsmcosim.DsmcosimError) as e:
         dsmcosim.CoSim(SCENARIOS / "grid16_space_cp.json")
     assert e.value.field == "controller"
+    # A huge time is repeated in a short form, not with its 301 digits.
+    with pytest.raises(dsmcosim.DsmcosimError) as e:
+        sim.advance(-1e300)
+    assert "(got -1e300)" in str(e.value), str(e.value)
 
 
 def test_a_mid_run_schedule_replays_through_the_cli(tmp_path):

@@ -182,14 +182,47 @@ fn eval_error(node: &Node, t: SimTime, e: EvalError, scenario: &Scenario) -> Err
         EvalError::NonFinite { link } => {
             let g = node.links[link];
             let l = &scenario.links[g];
+            let a = format!("B{}", scenario.bodies[l.a].id);
+            let b = if l.world {
+                "the world".to_string()
+            } else {
+                format!("B{}", scenario.bodies[l.b].id)
+            };
+            // The first quantity of the node's state that is not finite, if any: what
+            // overflowed, and on which body.
+            let st = &node.state;
+            let bad = (0..node.bodies.len()).find_map(|i| {
+                let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+                let what = [
+                    ("position", finite(st.p[i].as_slice())),
+                    ("velocity", finite(st.v[i].as_slice())),
+                    ("orientation", st.q.get(i).is_none_or(|q| finite(q.coords.as_slice()))),
+                    (
+                        "angular velocity",
+                        st.omega.get(i).is_none_or(|w| finite(w.as_slice())),
+                    ),
+                ]
+                .into_iter()
+                .find(|(_, ok)| !ok)?;
+                Some(format!(
+                    "B{}'s {} is not finite",
+                    scenario.bodies[node.bodies[i]].id,
+                    what.0
+                ))
+            });
+            let what = match (bad, l.joint.is_some()) {
+                (Some(bad), _) => format!("non-finite state ({bad}) on the row of {a} and {b}"),
+                (None, true) => format!("non-finite kinematics of the joint between {a} and {b}"),
+                (None, false) => format!(
+                    "non-finite kinematics (the anchors of {a} and {b} coincide, so the link \
+                     has no direction)"
+                ),
+            };
             Error::Diverged(Divergence {
                 time: t,
                 node: n + 1,
                 place: scenario.place_of_row(g),
-                what: format!(
-                    "non-finite kinematics (anchors of B{} and B{} coincide or the state is not finite)",
-                    scenario.bodies[l.a].id, scenario.bodies[l.b].id
-                ),
+                what,
             })
         }
         EvalError::Solve(crate::multibody::solver::SolveError::CgBudget {
@@ -213,6 +246,15 @@ fn eval_error(node: &Node, t: SimTime, e: EvalError, scenario: &Scenario) -> Err
                 node.links[link] + 1
             ),
         },
+        EvalError::NonFiniteBody { body, what } => Error::Diverged(Divergence {
+            time: t,
+            node: n + 1,
+            place: crate::error::Place::Body(scenario.bodies[node.bodies[body]].id),
+            what: format!(
+                "non-finite {what}: the body's loads or spin overflow f64 (its torques or \
+                 forces, or the gyroscopic couple of its spin)"
+            ),
+        }),
         EvalError::Solve(_) => Error::Numerical {
             time: t,
             message: format!(

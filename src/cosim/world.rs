@@ -948,6 +948,7 @@ impl CoSim {
                 return Err(self.body_diverged(t, b));
             }
         }
+        self.check_rotations(t)?;
         Ok(max)
     }
 
@@ -1022,8 +1023,34 @@ impl CoSim {
         self.max_violation = self.max_violation.max(step_max);
         match bodies.into_iter().flatten().next() {
             Some(b) => Err(self.body_diverged(t, b)),
-            None => Ok(step_max),
+            None => {
+                self.check_rotations(t)?;
+                Ok(step_max)
+            }
         }
+    }
+
+    /// The gathered rotations at `t` (empty on point masses): a torque too large for
+    /// `f64` spins a body to an infinite rate while a link through its centre feels
+    /// nothing, so the links alone would not see it.
+    fn check_rotations(&self, t: SimTime) -> Result<()> {
+        let finite = |x: &[f64]| x.iter().all(|v| v.is_finite());
+        for (b, (q, w)) in self.q.iter().zip(&self.omega).enumerate() {
+            let what = if !finite(w.as_slice()) {
+                "angular velocity"
+            } else if !finite(q.coords.as_slice()) {
+                "orientation"
+            } else {
+                continue;
+            };
+            return Err(Error::Diverged(Divergence {
+                time: t,
+                node: self.body_home[b].0 + 1,
+                place: Place::Body(self.scenario.bodies[b].id),
+                what: format!("non-finite {what} (the loads on it overflow f64)"),
+            }));
+        }
+        Ok(())
     }
 
     /// Link `l` diverged at `t`: `what`.
@@ -1134,10 +1161,15 @@ fn link_fault(w: f64, f: f64, bound: f64) -> Option<String> {
 #[cold]
 #[inline(never)]
 fn link_fault_text(w: f64, f: f64, bound: f64) -> String {
+    use crate::error::num;
     if !w.is_finite() || !f.is_finite() {
-        format!("non-finite w = {w} or f = {f}")
+        format!("non-finite w = {} or f = {}", num(w), num(f))
     } else {
-        format!("|w| = {} m exceeds the bound {bound} m", w.abs())
+        format!(
+            "|w| = {} m exceeds the bound {} m",
+            num(w.abs()),
+            num(bound)
+        )
     }
 }
 
@@ -1158,4 +1190,18 @@ fn gather_rotations(
 /// Whether a body's gathered position and velocity are finite.
 fn body_finite(p: &Vector3<f64>, v: &Vector3<f64>) -> bool {
     p.iter().chain(v.iter()).all(|x| x.is_finite())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::link_fault;
+
+    #[test]
+    fn a_link_fault_prints_short_numbers() {
+        let text = link_fault(-2.5e55, 1.0, 1.0).expect("a fault");
+        assert_eq!(text, "|w| = 2.5e55 m exceeds the bound 1 m");
+        let text = link_fault(f64::NAN, 1e300, 1.0).expect("a fault");
+        assert_eq!(text, "non-finite w = NaN or f = 1e300");
+        assert_eq!(link_fault(0.5, 3.0, 1.0), None);
+    }
 }

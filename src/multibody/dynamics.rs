@@ -29,6 +29,14 @@ pub enum EvalError {
     },
     /// The multiplier solve failed.
     Solve(SolveError),
+    /// A body's load or inertia overflowed `f64` (0-based body index, local to the
+    /// system): the solve then fails on non-finite entries, not on the geometry.
+    NonFiniteBody {
+        /// Body index.
+        body: usize,
+        /// The quantity: `force`, `torque` or `inertia`.
+        what: &'static str,
+    },
 }
 
 /// `sat(y)`: `y` inside the boundary layer `|y| ≤ 1`, `sign(y)` outside.
@@ -42,7 +50,7 @@ impl System {
         self.rates_to_rhs(t, state)?;
         self.solver
             .solve(&self.geo, &self.mass, &self.ws.rhs, &mut self.ws.sol)
-            .map_err(EvalError::Solve)?;
+            .map_err(|e| self.solve_failure(e))?;
         self.check_cg_budget().map_err(EvalError::Solve)?;
         self.rates_from_solution(state, out);
         Ok(())
@@ -85,6 +93,35 @@ impl System {
             }
         }
         Ok(())
+    }
+
+    /// What a failed multiplier solve of the last evaluation means: a body whose load or
+    /// inertia overflowed (read from the evaluation's workspace, so the happy path pays
+    /// nothing), else the solve's own error.
+    pub(crate) fn solve_failure(&self, e: SolveError) -> EvalError {
+        if matches!(e, SolveError::CgBudget { .. }) {
+            return EvalError::Solve(e);
+        }
+        let finite = |x: &[f64]| x.iter().all(|v| v.is_finite());
+        let nb = self.extra_force.len();
+        for i in 0..nb {
+            let what = if !finite(self.ws.force[i].as_slice()) {
+                "force"
+            } else if self.ws.torque.get(i).is_some_and(|t| !finite(t.as_slice())) {
+                "torque"
+            } else if self
+                .mass
+                .inv_inertia
+                .get(i)
+                .is_some_and(|m| !finite(m.as_slice()))
+            {
+                "inertia"
+            } else {
+                continue;
+            };
+            return EvalError::NonFiniteBody { body: i, what };
+        }
+        EvalError::Solve(e)
     }
 
     /// The rest of stage 5 once `ws.sol` holds the multipliers' solution, and the rates.
@@ -144,6 +181,8 @@ impl System {
         for f in &self.forces {
             match f.applied {
                 LoadAt::Centre => self.ws.force[f.body] += f.at(t),
+                // A torque on point masses: validation admits only a zero one.
+                LoadAt::Torque if !self.rigid => {}
                 // Off the centre and torques: validation chose rigid bodies.
                 _ => {
                     let rotation = UnitQuaternion::new_normalize(state.q[f.body]);

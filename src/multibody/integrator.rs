@@ -116,7 +116,11 @@ impl System {
                 sys.note_step_multipliers();
             }
             if let Some((i, e)) = first_solve_error {
-                return Err((base + i, EvalError::Solve(e)));
+                let failure = match &chunk[i] {
+                    Some((sys, _)) => sys.solve_failure(e),
+                    None => EvalError::Solve(e),
+                };
+                return Err((base + i, failure));
             }
             if let Some((i, e)) = failed {
                 return Err((base + i, e));

@@ -1,6 +1,7 @@
 //! Requested delays a network did not realize.
 //!
-//! An ideal channel runs any requested period to the nanosecond. A TDMA slot list
+//! An ideal channel runs any requested period of at least one step, to the nanosecond
+//! (a shorter one runs at one step, dt). A TDMA slot list
 //! quantizes it: to whole slots, and to at most one cycle, since the list serves every
 //! channel at least once per cycle. A request of 50 ms on a 5-ms cycle runs at 5 ms,
 //! and a run that says nothing about it reads as a 50-ms experiment. Every window where
@@ -27,14 +28,26 @@ pub struct Unserved {
     pub requested: f64,
     /// What ran in that window [s].
     pub achieved: f64,
+    /// Why, for the terminal: a TDMA slot list's quantization, or (`None`) an ideal
+    /// channel's floor of one step, `dt` [s].
+    #[serde(skip)]
+    pub floor: Option<f64>,
 }
 
 impl Unserved {
     /// The terminal's line for it.
     pub fn warning(&self) -> String {
+        let why = match self.floor {
+            Some(dt) => format!(
+                "an ideal channel sends at most once per step, dt = {} s",
+                crate::error::num(dt)
+            ),
+            None => "a TDMA slot list serves a channel in whole slots and at least once per \
+                     cycle"
+                .to_string(),
+        };
         format!(
-            "channel {} asked for τ = {} s and ran at {} s in {} of {} windows (a TDMA \
-             slot list serves a channel in whole slots and at least once per cycle); \
+            "channel {} asked for τ = {} s and ran at {} s in {} of {} windows ({why}); \
              its delays are the achieved ones",
             self.channel,
             crate::error::num(self.requested),
@@ -51,6 +64,10 @@ pub fn unserved(world: &CoSim) -> Vec<Unserved> {
         .tdma()
         .map_or(0.0, |l| l.network().layout().slot_len().as_secs_f64());
     let epochs = world.epochs();
+    let floor = world
+        .tdma()
+        .is_none()
+        .then(|| world.scenario().dt.as_secs_f64());
     world
         .channels()
         .iter()
@@ -70,6 +87,7 @@ pub fn unserved(world: &CoSim) -> Vec<Unserved> {
                 of: epochs.len(),
                 requested: first.taus[i].0,
                 achieved: first.taus[i].1,
+                floor,
             })
         })
         .collect()

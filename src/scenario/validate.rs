@@ -708,10 +708,13 @@ fn loads_needing_rotation(file: &ScenarioFile) -> Option<(String, Vec<f64>)> {
             .filter(|p| *p != [0.0; 3])
             .map(|p| (format!("forces[{i}].point"), p.to_vec()))
     });
+    // A zero torque turns nothing: point masses may carry one.
     point.or_else(|| {
         file.torques
-            .first()
-            .map(|t| ("torques[0].amplitude".to_string(), t.amplitude.to_vec()))
+            .iter()
+            .enumerate()
+            .find(|(_, t)| t.amplitude != [0.0; 3])
+            .map(|(i, t)| (format!("torques[{i}].amplitude"), t.amplitude.to_vec()))
     })
 }
 
