@@ -17,5 +17,6 @@ mod fmus;
 mod forks;
 mod loading;
 mod logging;
+mod own_fmu;
 mod states;
 mod status;
