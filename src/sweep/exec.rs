@@ -305,6 +305,37 @@ pub fn check_with(sweep_path: &Path, sets: &[String]) -> Result<Checked> {
     })
 }
 
+/// Points' traces above which a sweep that keeps them says how much it will keep
+/// [bytes]: 100 MB.
+pub const KEEP_WARNING_BYTES: u64 = 100_000_000;
+
+/// What keeping every point's files will cost, when it is much: the traces alone of the
+/// points to run (each point's estimate is its run's bound on `trace.csv`, taken from
+/// the first point: a sweep's points share their output settings unless an axis moves
+/// them), above [`KEEP_WARNING_BYTES`], with `--keep summary`'s way out.
+fn keep_warning(loaded: &Loaded, to_run: &[&Point], keep: Keep) -> Result<Option<String>> {
+    let Some(first) = to_run.first().filter(|_| keep != Keep::Summary) else {
+        return Ok(None);
+    };
+    let scenario = crate::scenario::parse_at(&first.text, &first.key, Some(&loaded.base_path))?;
+    let each = crate::run::budget::Estimate::of(&scenario, None).trace_bytes;
+    Ok(keep_message(to_run.len(), each, keep))
+}
+
+/// [`keep_warning`]'s line for `points` points of `each` trace bytes kept as `keep`
+/// says, if they come to more than [`KEEP_WARNING_BYTES`].
+fn keep_message(points: usize, each: u64, keep: Keep) -> Option<String> {
+    let total = each.saturating_mul(points as u64);
+    (keep != Keep::Summary && total > KEEP_WARNING_BYTES).then(|| {
+        format!(
+            "{points} points will keep every file they write (--keep {}): their traces alone \
+             come to about {} MB; `--keep summary` keeps what sweep.csv and a rerun need",
+            if keep == Keep::All { "all" } else { "trace" },
+            total / 1_000_000
+        )
+    })
+}
+
 /// Runs the sweep defined in `sweep_path` into `out`; see the module docs of
 /// [`crate::sweep`].
 ///
@@ -363,6 +394,9 @@ pub fn run(sweep_path: &Path, out: &Path, options: &Options) -> Result<Report> {
             _ => {}
         }
         to_run.push(*p);
+    }
+    if let Some(w) = keep_warning(&loaded, &to_run, options.keep)? {
+        eprintln!("warning: {w}");
     }
     let progress = Mutex::new(Progress::with_unit(to_run.len() as u64, "points"));
     let finished = AtomicU64::new(0);
@@ -480,6 +514,21 @@ fn run_point(out: &Path, loaded: &Loaded, p: &Point, keep: Keep) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_sweep_that_keeps_much_says_how_much_and_one_that_keeps_summaries_does_not() {
+        // 600 points of 387 kB each: the slot-layout study's size.
+        let m = keep_message(600, 387_000, Keep::All).expect("a warning");
+        assert_eq!(
+            m,
+            "600 points will keep every file they write (--keep all): their traces alone \
+             come to about 232 MB; `--keep summary` keeps what sweep.csv and a rerun need"
+        );
+        assert!(keep_message(600, 387_000, Keep::Trace).is_some_and(|m| m.contains("--keep trace")));
+        assert_eq!(keep_message(600, 387_000, Keep::Summary), None);
+        assert_eq!(keep_message(60, 387_000, Keep::All), None);
+        assert_eq!(keep_message(usize::MAX, u64::MAX, Keep::Summary), None);
+    }
 
     #[test]
     fn shards_split_by_index() {
