@@ -407,8 +407,9 @@ pub(crate) fn solver_json(scenario: &Scenario) -> Value {
     }
 }
 
-/// `divergence` in summary.json: where and when a run failed, as fields (the same as
-/// the `error` text).
+/// `divergence` in summary.json: where and when a run diverged or failed numerically,
+/// as fields (the same as the `error` text); null for a failure that is not one (an
+/// unwritable checkpoint, an FMU's error, an interruption: `error` says what).
 fn divergence(e: &Error) -> Value {
     match e {
         Error::Diverged(d) => {
@@ -424,9 +425,7 @@ fn divergence(e: &Error) -> Value {
         Error::Numerical { time, message } => {
             json!({"time": time.as_secs_f64(), "node": null, "link": null, "body": null, "what": message})
         }
-        other => {
-            json!({"time": null, "node": null, "link": null, "body": null, "what": other.to_string()})
-        }
+        _ => Value::Null,
     }
 }
 
@@ -497,7 +496,7 @@ fn write_summary(out: &Path, run: &Ran) -> Result<()> {
             Some(_) => "failed",
         },
         "error": error,
-        "divergence": failure.map(divergence),
+        "divergence": failure.map_or(Value::Null, divergence),
         "digest": outcome.digest,
         "digest_algorithm": DIGEST_ALGORITHM,
         "dynamics_digest": outcome.dynamics_digest,

@@ -81,6 +81,68 @@ const CONTENT: &str = "fmu";
 /// Name of the archive's copy inside the private directory.
 const COPY: &str = "archive.fmu";
 
+/// Start of every unpack directory's name, followed by the unpacking process's id and a
+/// random suffix: `dsmcosim-fmu-<pid>-XXXXXX`.
+const PREFIX: &str = "dsmcosim-fmu-";
+
+/// Removes from `tmp` the unpack directories of processes that no longer run: an FMU
+/// that crashed or called `exit` takes the process down before its directory is
+/// removed. Only directories (never a symlink) named `dsmcosim-fmu-<pid>-…`, owned by
+/// this user, whose process is gone are removed; a live (or reused) pid keeps its
+/// directory, and nothing here stops a run.
+fn remove_stale(tmp: &Path) {
+    let Ok(entries) = fs::read_dir(tmp) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(pid) = name
+            .to_str()
+            .and_then(|n| n.strip_prefix(PREFIX))
+            .and_then(|rest| rest.split_once('-'))
+            .and_then(|(pid, _)| pid.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        let Ok(meta) = fs::symlink_metadata(entry.path()) else {
+            continue;
+        };
+        if !meta.is_dir() || !owned_by_us(&meta) || process_runs(pid) {
+            continue;
+        }
+        let _ = fs::remove_dir_all(entry.path());
+    }
+}
+
+#[cfg(unix)]
+fn owned_by_us(meta: &fs::Metadata) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    // SAFETY: geteuid has no preconditions and cannot fail.
+    meta.uid() == unsafe { libc::geteuid() }
+}
+
+#[cfg(not(unix))]
+fn owned_by_us(_: &fs::Metadata) -> bool {
+    false
+}
+
+/// Whether process `pid` exists (signal 0 probes without sending; a process of another
+/// user answers EPERM and exists too).
+#[cfg(unix)]
+fn process_runs(pid: u32) -> bool {
+    let Ok(pid) = libc::pid_t::try_from(pid) else {
+        return true;
+    };
+    // SAFETY: kill with signal 0 only checks that the process exists.
+    let probed = unsafe { libc::kill(pid, 0) };
+    probed == 0 || std::io::Error::last_os_error().raw_os_error() == Some(libc::EPERM)
+}
+
+#[cfg(not(unix))]
+fn process_runs(_: u32) -> bool {
+    true
+}
+
 /// Unpacks `path` with the default caps ([`Limits::default`]).
 pub fn unpack(path: &Path) -> Result<Unpacked, FmuError> {
     unpack_with_limits(path, &Limits::default())
@@ -93,8 +155,10 @@ pub fn unpack_with_limits(path: &Path, limits: &Limits) -> Result<Unpacked, FmuE
         let p = p.to_path_buf();
         move |source| FmuError::Io { path: p, source }
     };
+    static SWEPT: std::sync::Once = std::sync::Once::new();
+    SWEPT.call_once(|| remove_stale(&std::env::temp_dir()));
     let dir = tempfile::Builder::new()
-        .prefix("dsmcosim-fmu-")
+        .prefix(&format!("{PREFIX}{}-", std::process::id()))
         .tempdir()
         .map_err(io_err(&std::env::temp_dir()))?;
     // tempfile creates it 0700 already; set it anyway, the privacy is the point.

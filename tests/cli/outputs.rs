@@ -336,6 +336,12 @@ fn write_failures_are_errors_with_their_own_status() {
     ]);
     assert_eq!(exit(&o), Some(1), "{}", said(&o));
     assert_eq!(summary(&out)["status"], json!("failed"));
+    // Not a divergence: `error` says what stopped it, and no divergence object claims
+    // a time and place for it.
+    assert_eq!(summary(&out)["divergence"], json!(null));
+    assert!(summary(&out)["error"]
+        .as_str()
+        .is_some_and(|e| !e.is_empty()));
     // --checkpoint-every 1e308 says what is wrong, in a short number.
     let o = run(&[
         "run",
