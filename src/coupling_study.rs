@@ -323,6 +323,12 @@ pub fn study(
     duration: Option<f64>,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Vec<Cell>> {
+    crate::output::refuse_foreign_outputs(out, "coupling.csv", |n| {
+        matches!(
+            n,
+            "coupling.md" | "error_vs_tau.svg" | "max_w_vs_tau.svg" | "energy_vs_tau.svg"
+        )
+    })?;
     let (scenario, text) = crate::scenario::load_with(path, sets)?;
     if scenario.partition.is_none() || scenario.links.is_empty() {
         return Err(Error::invalid(

@@ -91,6 +91,7 @@ fn run_name(dir: &Path) -> String {
 
 /// Compares `runs` with `reference` for `bodies` and writes into `out`.
 pub fn command(reference: &Path, runs: &[PathBuf], bodies: &[u32], out: &Path) -> Result<()> {
+    crate::output::refuse_foreign_outputs(out, "distance.csv", |n| n == "distance.svg")?;
     let curves = runs.len() * bodies.len();
     if curves == 0 || curves > MAX_CURVES {
         return Err(Error::invalid(

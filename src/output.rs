@@ -182,6 +182,43 @@ pub fn create_out_dir(path: &Path) -> Result<()> {
     create_dir_all(path)
 }
 
+/// Refuses a directory a study command would write into when it holds, under a name
+/// the command writes, a file the command did not write there: the rule `run` keeps
+/// (only what the tool wrote, only in a directory it claimed). The directory is the
+/// command's when it is missing or holds the command's `manifest` (`sweep.json`,
+/// `coupling.csv`, …, written first or together with the rest), and then its outputs
+/// are replaced; otherwise the first existing entry named as `writes` says (in name
+/// order) is the user's, refused with exit 2 before anything is computed.
+pub fn refuse_foreign_outputs(
+    dir: &Path,
+    manifest: &str,
+    writes: impl Fn(&str) -> bool,
+) -> Result<()> {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Ok(()); // missing (created later), or not a directory (refused later)
+    };
+    if dir.join(manifest).exists() {
+        return Ok(());
+    }
+    let mut names: Vec<String> = entries
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| writes(n))
+        .collect();
+    names.sort();
+    match names.first() {
+        None => Ok(()),
+        Some(name) => Err(Error::invalid(
+            "--out",
+            format!(
+                "{} holds {name}, which dsmcosim did not write there (no {manifest} beside \
+                 it) and would replace: choose another directory, or move the file",
+                dir.display()
+            ),
+        )),
+    }
+}
+
 /// A buffered file that appears at its path only when [`AtomicFile::commit`] succeeds.
 ///
 /// For large streamed outputs such as `trace.csv`. Dropping it without a commit (an

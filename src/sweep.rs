@@ -86,6 +86,15 @@ pub use points::{derive_seed, splitmix64};
 use crate::error::Result;
 use crate::output::write_atomic;
 
+/// Whether `name` is an entry `sweep` or `sweep-merge` writes at the top of its output
+/// directory (beside `sweep.json`, which claims it): the tables, the plots, `points/`.
+pub(crate) fn writes(name: &str) -> bool {
+    matches!(
+        name,
+        "sweep.csv" | "timing.csv" | "points" | "cost_heatmap.svg"
+    ) || (name.starts_with("cost_vs_") && name.ends_with(".svg"))
+}
+
 /// Writes `sweep.csv`, `timing.csv` and the plots of `records` (sorted by index) into
 /// `out`; the one writer of both `sweep` and `sweep-merge`.
 fn write_outputs(out: &Path, plan: &points::Plan, records: &[record::Record]) -> Result<()> {

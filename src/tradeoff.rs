@@ -176,6 +176,9 @@ pub fn with_horizon(json: &Value, duration: f64, flag: &str) -> Result<(Value, S
 /// Runs the work-precision study of the scenario file `path` (with the `--set`
 /// overrides `sets` applied) and writes its outputs into `out`.
 pub fn tradeoff(path: &Path, sets: &[String], out: &Path, options: Options) -> Result<Study> {
+    crate::output::refuse_foreign_outputs(out, "tradeoff.csv", |n| {
+        matches!(n, "tradeoff.md" | "work_precision.svg" | "pareto.svg")
+    })?;
     let (json, scenario) = load_json(path, sets)?;
     let study = study(&json, &scenario, options)?;
     write::write_study(out, &study)?;

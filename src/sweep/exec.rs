@@ -346,7 +346,8 @@ fn keep_message(points: usize, each: u64, keep: Keep) -> Option<String> {
 /// has finished and written its `done.json`.
 pub fn run(sweep_path: &Path, out: &Path, options: &Options) -> Result<Report> {
     let loaded = load(sweep_path, &options.sets)?;
-    if !options.resume && (out.join("sweep.json").exists() || out.join("points").exists()) {
+    crate::output::refuse_foreign_outputs(out, "sweep.json", super::writes)?;
+    if !options.resume && out.join("sweep.json").exists() {
         return Err(Error::invalid(
             "--out",
             format!(
@@ -360,8 +361,10 @@ pub fn run(sweep_path: &Path, out: &Path, options: &Options) -> Result<Report> {
     // task) is refused at once, naming the holder, instead of both rerunning the same
     // points and neither writing sweep.csv. Held until the sweep returns.
     let _lock = crate::output::run_dir::lock(out, SWEEP_LOCK, "dsmcosim sweep")?;
-    create_dir_all(&out.join("points"))?;
+    // sweep.json first: it claims the directory, so a sweep stopped at any point after
+    // it resumes.
     write_atomic(&out.join("sweep.json"), loaded.text.as_bytes())?;
+    create_dir_all(&out.join("points"))?;
     let selected: Vec<&Point> = loaded
         .points
         .iter()

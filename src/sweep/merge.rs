@@ -58,6 +58,7 @@ pub fn merge(out: &Path, shards: &[PathBuf]) -> Result<MergeReport> {
     let first = shards
         .first()
         .ok_or_else(|| Error::invalid("sweep-merge", "needs at least one shard directory"))?;
+    crate::output::refuse_foreign_outputs(out, "sweep.json", super::writes)?;
     let mut definition: Option<(Value, String)> = None;
     for dir in shards {
         let path = dir.join("sweep.json");

@@ -88,6 +88,12 @@ pub fn stability_map(
     out: &Path,
     duration: Option<f64>,
 ) -> Result<StabilityMap> {
+    crate::output::refuse_foreign_outputs(out, "stability_map.csv", |n| {
+        matches!(
+            n,
+            "stability_map.md" | "stability_map.svg" | "stability_max_w.svg"
+        )
+    })?;
     let (json, scenario) = super::load_json(path, sets)?;
     let Stabilizer::Smc { k, epsilon, .. } = scenario.stabilizer else {
         return Err(Error::invalid(

@@ -8,7 +8,7 @@ use std::process::{Command, Output};
 
 use serde_json::json;
 
-use super::{bin, run, said, scratch, short_grid, summary, write_json};
+use super::{bin, repo, run, said, scratch, short_grid, summary, write_json};
 
 fn arg(p: &Path) -> &str {
     p.to_str().expect("utf-8 path")
@@ -440,4 +440,82 @@ fn distance_quotes_a_run_path_with_a_comma() {
     let mut r = csv::Reader::from_reader(csv.as_bytes());
     let header: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
     assert_eq!(header, ["t".to_string(), format!("{}_B1", b.display())]);
+}
+
+/// Every study command keeps `run`'s rule: a file of one of its output names in a
+/// directory it has not claimed (no manifest: sweep.json, coupling.csv, …) is the
+/// user's. The command refuses it with exit 2 before computing anything, and the file
+/// is left as it was.
+#[test]
+fn no_command_replaces_a_users_file_in_a_directory_it_has_not_claimed() {
+    let dir = scratch("out-foreign-files");
+    let repo = repo();
+    let path = |p: &str| repo.join(p).display().to_string();
+    let cases: Vec<(Vec<String>, &str, &str)> = vec![
+        (
+            vec![
+                "sweep".into(),
+                path("scenarios/sweeps/tdma4_slot_layouts.json"),
+            ],
+            "timing.csv",
+            "sweep.json",
+        ),
+        (vec!["sweep-merge".into()], "sweep.csv", "sweep.json"),
+        (
+            vec!["coupling".into(), path("scenarios/mechanisms/ring12.json")],
+            "coupling.md",
+            "coupling.csv",
+        ),
+        (
+            vec!["tradeoff".into(), path("scenarios/grid16_monolithic.json")],
+            "pareto.svg",
+            "tradeoff.csv",
+        ),
+        (
+            vec![
+                "stability-map".into(),
+                path("scenarios/grid16_monolithic.json"),
+            ],
+            "stability_map.svg",
+            "stability_map.csv",
+        ),
+        (
+            vec![
+                "distance".into(),
+                path("results/grid16_monolithic"),
+                path("results/grid16_space_fixed"),
+                "--bodies".into(),
+                "1".into(),
+            ],
+            "distance.svg",
+            "distance.csv",
+        ),
+    ];
+    for (i, (mut args, theirs, manifest)) in cases.into_iter().enumerate() {
+        let out = dir.join(format!("case{i}"));
+        std::fs::create_dir_all(&out).expect("mkdir");
+        std::fs::write(out.join(theirs), "the user's own\n").expect("write");
+        if args[0] == "sweep-merge" {
+            // OUT, then a shard (never read: the refusal comes first).
+            args.push(out.display().to_string());
+            args.push(dir.join("no-shard").display().to_string());
+        } else {
+            args.extend(["--out".into(), out.display().to_string()]);
+        }
+        let argv: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o = run(&argv);
+        assert_eq!(exit(&o), Some(2), "{args:?}: {}", said(&o));
+        assert!(
+            said(&o).contains(&format!(
+                "holds {theirs}, which dsmcosim did not write there (no {manifest} beside it)"
+            )),
+            "{args:?}: {}",
+            said(&o)
+        );
+        assert_eq!(
+            std::fs::read_to_string(out.join(theirs)).expect("still there"),
+            "the user's own\n"
+        );
+        assert!(!out.join(manifest).exists(), "{args:?} wrote {manifest}");
+    }
 }
