@@ -52,6 +52,14 @@ pub enum Error {
     /// the FMU, the function and the simulated time.
     #[error("{0}")]
     Fmu(String),
+    /// An allocation the run needed failed (the process's memory limit, `ulimit -v`):
+    /// `what` names what was being allocated and when. Not a divergence: nothing about
+    /// the simulation is wrong.
+    #[error("out of memory: {what}")]
+    OutOfMemory {
+        /// What could not be allocated, with the time and node.
+        what: String,
+    },
     /// `dsmcosim check`: the rerun differs from the stored run; the message names the
     /// first differing record.
     #[error("{0}")]
@@ -153,13 +161,13 @@ impl Error {
 
     /// Process exit code: 2 for bad input, 3 for a diverged or numerically failed run or a
     /// failed FMU,
-    /// 1 for I/O failures, 4 for a `check` that found a difference; for a `check` of
+    /// 1 for I/O failures and a failed allocation, 4 for a `check` that found a difference; for a `check` of
     /// several scenarios, the code their outcomes give.
     pub fn exit_code(&self) -> u8 {
         match self {
             Error::Parse { .. } | Error::Invalid { .. } => 2,
             Error::Diverged(_) | Error::Numerical { .. } | Error::Fmu(_) => 3,
-            Error::Io { .. } => 1,
+            Error::Io { .. } | Error::OutOfMemory { .. } => 1,
             Error::Mismatch(_) => 4,
             Error::Checks { code, .. } => *code,
             Error::Interrupted { .. } => 130,

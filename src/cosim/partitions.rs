@@ -255,6 +255,17 @@ fn eval_error(node: &Node, t: SimTime, e: EvalError, scenario: &Scenario) -> Err
                  forces, or the gyroscopic couple of its spin)"
             ),
         }),
+        EvalError::Solve(crate::multibody::solver::SolveError::OutOfMemory { rows }) => {
+            Error::OutOfMemory {
+                what: format!(
+                    "the exact solve's factorization of {rows} constraint rows (its analysis, \
+                     work buffers and factor) could not be allocated at t = {t}, node {}: \
+                     raise the process's memory limit, or use \"solver\": {{\"kind\": \"cg\"}}, \
+                     which needs no factor",
+                    n + 1
+                ),
+            }
+        }
         EvalError::Solve(_) => Error::Numerical {
             time: t,
             message: format!(

@@ -52,6 +52,12 @@ pub enum SolveError {
     /// The Cholesky factorization met a non-positive pivot (`A` singular: redundant
     /// links, or non-finite geometry).
     NotPositiveDefinite,
+    /// The sparse factorization's analysis or buffers could not be allocated (faer's
+    /// out-of-memory, or an index beyond its range): `rows` is the system's size.
+    OutOfMemory {
+        /// Rows of the system.
+        rows: usize,
+    },
     /// The CG budget cannot hold the constraints: for `solves` consecutive solves CG
     /// stopped at its budget with a residual that alone holds a link off by a visible
     /// part of `divergence.max_violation` (see
@@ -398,7 +404,10 @@ impl Exact {
             } else {
                 ordered::Layout::BySize
             };
-            self.ordered.0 = ordered::Ordered::new(n, &self.col_ptr, &self.row_idx, layout);
+            self.ordered.0 = Some(
+                ordered::Ordered::new(n, &self.col_ptr, &self.row_idx, layout)
+                    .ok_or(SolveError::OutOfMemory { rows: n })?,
+            );
             // Restored from a checkpoint with a factor in use: factorize the values it
             // was made of (the same bits as the factor lost).
             if let (Some(o), Some(old)) = (

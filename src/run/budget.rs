@@ -38,6 +38,14 @@ pub const MEMORY_BASE: u64 = 10_000_000;
 /// at 64×64, 2.2 kB at 128×128, 2.4 kB at 256×256 and 512×512, 2.2 kB at 1000×1000;
 /// rounded up.
 pub const MEMORY_PER_BODY: u64 = 2_500;
+/// Memory per constraint row beyond two per body [bytes]: [`MEMORY_PER_BODY`] was
+/// measured on grids, about two links per body, so a scene of joints (a weld adds six
+/// rows, a hinge five) holds rows it does not cover: each row's specification, its
+/// kinematics and multiplier workspaces, its pattern entries in the solve and its two
+/// trace columns. Measured peaks (`/usr/bin/time -v`, 10 steps, the exact solve) above
+/// the estimate without this term, per such row: 2.04 kB on a chain of 5000 welds,
+/// 2.13 kB on 20 000 welds, 2.42 kB on 50 000 ball joints; rounded up with a margin.
+pub const MEMORY_PER_EXTRA_ROW: u64 = 3_000;
 /// Memory per spring [bytes]: its specification (about 120 bytes) held by the
 /// scenario, the monolithic system and a partitioned run's node and its copy of the
 /// scenario, rounded up. Not measured as the per-body figure is: it is the size of what
@@ -175,8 +183,11 @@ pub struct Estimate {
     /// Entries of the exact solve's factor bound (0 on the CG path and for small
     /// systems, which use a dense factor).
     pub factor_entries: u64,
-    /// Estimated peak memory [bytes]: [`MEMORY_BASE`], [`MEMORY_PER_BODY`] per body and
-    /// [`BYTES_PER_FACTOR_ENTRY`] per factor entry.
+    /// [`Estimate::memory_bytes`] without the factor: what the CG path needs [bytes].
+    pub memory_without_factor: u64,
+    /// Estimated peak memory [bytes]: [`MEMORY_BASE`], [`MEMORY_PER_BODY`] per body,
+    /// [`MEMORY_PER_EXTRA_ROW`] per row beyond two per body, [`MEMORY_PER_SPRING`] per
+    /// spring and [`BYTES_PER_FACTOR_ENTRY`] per factor entry.
     pub memory_bytes: u64,
 }
 
@@ -228,9 +239,13 @@ impl Estimate {
             } else {
                 0
             };
-        let memory_bytes = MEMORY_BASE
+        let extra_rows =
+            (scenario.links.len() as u64).saturating_sub(2 * scenario.bodies.len() as u64);
+        let memory_without_factor = MEMORY_BASE
             .saturating_add(MEMORY_PER_BODY.saturating_mul(scenario.bodies.len() as u64))
-            .saturating_add(MEMORY_PER_SPRING.saturating_mul(scenario.springs.len() as u64))
+            .saturating_add(MEMORY_PER_EXTRA_ROW.saturating_mul(extra_rows))
+            .saturating_add(MEMORY_PER_SPRING.saturating_mul(scenario.springs.len() as u64));
+        let memory_bytes = memory_without_factor
             .saturating_add(BYTES_PER_FACTOR_ENTRY.saturating_mul(factor_entries));
         Estimate {
             steps,
@@ -239,6 +254,7 @@ impl Estimate {
             trace_bytes,
             checkpoints,
             factor_entries,
+            memory_without_factor,
             memory_bytes,
         }
     }
@@ -266,8 +282,22 @@ impl Estimate {
                 ),
             ));
         }
+        if self.memory_bytes > limits.max_memory_bytes && self.factor_entries == u64::MAX {
+            // The factor's size is unknown: its symbolic analysis could not be allocated
+            // (under an address-space limit) or its pattern is beyond faer's indices.
+            return Err(Error::invalid(
+                "solver",
+                format!(
+                    "the exact solve's factor could not be sized: its symbolic analysis \
+                     itself could not be allocated in this process (an address-space limit, \
+                     `ulimit -v`, below what it needs) — `\"solver\": {{\"kind\": \"cg\"}}` \
+                     needs about {} MB",
+                    self.memory_without_factor.div_ceil(1_000_000)
+                ),
+            ));
+        }
         if self.memory_bytes > limits.max_memory_bytes {
-            let cg = self.memory_bytes - BYTES_PER_FACTOR_ENTRY.saturating_mul(self.factor_entries);
+            let cg = self.memory_without_factor;
             let hint = if self.factor_entries > 0 {
                 format!(
                     "; the exact solve's factor alone is up to {} entries — `\"solver\": \

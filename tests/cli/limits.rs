@@ -435,3 +435,58 @@ fn an_address_space_limit_below_the_estimate_refuses_the_run_up_front() {
     assert_eq!(o.status.code(), Some(0), "{}", said(&o));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// An allocation the exact solve cannot make (faer's analysis, buffers or factor under
+/// a tight `ulimit -v`, the estimate overridden by `--max-memory`) is an out-of-memory
+/// error, exit 1 naming memory: never a divergence or a "not positive definite"
+/// matrix. Over a range of limits around the 5000-weld chain's need, every run either
+/// succeeds, stops with that error, or is aborted by an allocation outside the solve
+/// (what `--max-memory` takes responsibility for); at least one limit lands in the
+/// solve.
+#[test]
+fn a_failed_allocation_of_the_solve_is_out_of_memory_not_a_divergence() {
+    let dir = scratch("limits-oom");
+    let n = 5000;
+    let bodies: Vec<_> = (0..n)
+        .map(|i| json!({"id": i + 1, "mass": 1.0, "size": 0.1, "position": [i as f64, 0, 0],
+                        "angular_velocity": [0, 0, 0.001]}))
+        .collect();
+    let joints: Vec<_> = (0..n - 1)
+        .map(|i| json!({"type": "weld", "a": i + 1, "b": i + 2, "at": [i as f64 + 0.5, 0, 0]}))
+        .collect();
+    let file = write_json(
+        &dir,
+        "welds.json",
+        &json!({"name": "welds", "seed": 1, "duration": 0.01, "dt": 0.001,
+                "model": {"bodies": bodies, "joints": joints}, "output": {"decimation": 10}}),
+    );
+    let exe = env!("CARGO_BIN_EXE_dsmcosim");
+    let mut in_the_solve = 0;
+    for kb in (66_000..=82_000).step_by(2_000) {
+        let out = dir.join(format!("out{kb}"));
+        let o = Command::new("sh")
+            .arg("-c")
+            .arg(format!(
+                "ulimit -v {kb} && exec '{exe}' -j 1 run '{}' --out '{}' --max-memory 1000000000",
+                file.display(),
+                out.display()
+            ))
+            .output()
+            .expect("sh");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !err.contains("not positive definite") && !err.contains("diverged"),
+            "ulimit -v {kb}: {err}"
+        );
+        match o.status.code() {
+            Some(0) => {}
+            Some(1) if err.contains("out of memory: the exact solve's factorization") => {
+                in_the_solve += 1
+            }
+            // An allocation outside the solve aborted the process (SIGABRT).
+            None => {}
+            other => panic!("ulimit -v {kb}: exit {other:?}: {err}"),
+        }
+    }
+    assert!(in_the_solve > 0, "no limit landed in the solve's allocations");
+}

@@ -113,7 +113,8 @@ pub(super) fn factor_entries(
 
 impl Ordered {
     /// The symbolic analysis of the lower triangle `(col_ptr, row_idx)` (sorted rows) of
-    /// an `n × n` symmetric pattern; `None` if faer refuses it.
+    /// an `n × n` symmetric pattern, with its buffers; `None` if they cannot be allocated
+    /// (faer's out-of-memory or index overflow, or the factor's own values).
     pub(super) fn new(
         n: usize,
         col_ptr: &[usize],
@@ -131,8 +132,13 @@ impl Ordered {
         .ok()?;
         let solve_scratch =
             MemBuffer::try_new(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq)).ok()?;
+        // Fallible: a factor too large for the memory left is an out-of-memory error of
+        // the run (`SolveError::OutOfMemory`), not an abort.
+        let mut l_values = Vec::new();
+        l_values.try_reserve_exact(symbolic.len_val()).ok()?;
+        l_values.resize(symbolic.len_val(), 0.0);
         Some(Ordered {
-            l_values: vec![0.0; symbolic.len_val()],
+            l_values,
             symbolic,
             factor_scratch,
             solve_scratch,
