@@ -16,6 +16,7 @@ mod front_page;
 mod limits;
 mod outputs;
 mod overrides;
+mod random_scenes;
 
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_dsmcosim"))
