@@ -43,7 +43,12 @@ pub static VERSION: std::sync::LazyLock<String> = std::sync::LazyLock::new(|| {
 /// Deterministic co-simulator of distributed multi-body simulations with SMC
 /// stabilization and delay optimization.
 #[derive(Debug, Parser)]
-#[command(name = "dsmcosim", version = VERSION.as_str(), about, long_about = None)]
+#[command(
+    name = "dsmcosim",
+    version = VERSION.as_str(),
+    about = "Deterministic co-simulation of distributed multi-body simulations over modelled networks",
+    long_about = None
+)]
 #[command(after_help = "Example: dsmcosim run scenarios/grid16_space_fixed.json -o runs/first")]
 pub struct Cli {
     /// Worker threads for the parallel parts (sweep points, `check` reruns, the nodes of
@@ -90,8 +95,10 @@ pub enum Command {
         #[command(flatten)]
         limits: LimitArgs,
     },
-    /// Run a scenario and write summary.json, trace.csv, epochs.csv, SVG plots and a copy
-    /// of the scenario file (scenario.json).
+    /// Run a scenario into a directory.
+    ///
+    /// Writes summary.json, trace.csv, epochs.csv, SVG plots and a copy of the scenario
+    /// file (scenario.json).
     ///
     /// Example: `dsmcosim run scenarios/grid16_space_fixed.json -o runs/first --set
     /// /channels/0/tau=0.004`
@@ -125,8 +132,10 @@ pub enum Command {
         #[arg(long, value_name = "S")]
         checkpoint_every: Option<f64>,
     },
-    /// Finish a run from one of its checkpoints, with the same digest as an
-    /// uninterrupted run; writes every output (the trace from t = 0) into --out.
+    /// Finish a run from one of its checkpoints.
+    ///
+    /// The same digest as an uninterrupted run; writes every output (the trace from t =
+    /// 0) into --out.
     ///
     /// Example: `dsmcosim resume runs/first/checkpoints/t_000010.000000000.ckpt -o
     /// runs/first` (after `dsmcosim run … --checkpoint-every 5`)
@@ -146,7 +155,9 @@ pub enum Command {
         #[arg(long, value_name = "S")]
         checkpoint_every: Option<f64>,
     },
-    /// Rerun scenarios and compare each with its stored run, bit for bit by default.
+    /// Rerun scenarios and compare each with its stored run.
+    ///
+    /// Bit for bit by default.
     ///
     /// Example: `dsmcosim check scenarios/*.json --against results/ --work /tmp/reruns`
     ///
@@ -198,9 +209,11 @@ pub enum Command {
         #[arg(long = "set", value_name = "POINTER=VALUE")]
         sets: Vec<String>,
     },
-    /// Speed–accuracy study: turn dt, integrator, J_s solve, stabilizer (and ghosts,
-    /// network on partitioned scenes) one at a time and measure each variant against a
-    /// monolithic RK4 reference at dt/20.
+    /// Study speed against accuracy, one setting at a time.
+    ///
+    /// Turns dt, integrator, J_s solve, stabilizer (and ghosts, network on partitioned
+    /// scenes) one at a time and measures each variant against a monolithic RK4
+    /// reference at dt/20.
     ///
     /// Example: `dsmcosim tradeoff scenarios/grid16_monolithic.json -o runs/tradeoff
     /// --duration 3`
@@ -223,8 +236,10 @@ pub enum Command {
         #[arg(long, value_name = "S")]
         duration: Option<f64>,
     },
-    /// Stability map: run the scenario over SMC μ (1 ms … 1 s) × dt (0.1 … 10 ms) and
-    /// classify each cell: 0 max|w| ≤ ε, 1 ran with max|w| > ε, 2 diverged.
+    /// Map stability over SMC μ × dt.
+    ///
+    /// Runs the scenario over SMC μ (1 ms … 1 s) × dt (0.1 … 10 ms) and classifies each
+    /// cell: 0 max|w| ≤ ε, 1 ran with max|w| > ε, 2 diverged.
     ///
     /// Example: `dsmcosim stability-map scenarios/grid16_monolithic.json -o runs/map
     /// --duration 12`
@@ -245,9 +260,11 @@ pub enum Command {
         #[arg(long, value_name = "S")]
         duration: Option<f64>,
     },
-    /// Coupling study: every coupling scheme (reset, predict, passive) × delay τ (3, 5,
-    /// 8, 10, 15, 20, 30, 50 ms, latency = τ) × distribution (space, time) on a
-    /// partitioned scenario, on ideal channels without its controller.
+    /// Study the coupling schemes over delay on a partitioned scenario.
+    ///
+    /// Every coupling scheme (reset, predict, passive) × delay τ (3, 5, 8, 10, 15, 20,
+    /// 30, 50 ms, latency = τ) × distribution (space, time), on ideal channels without
+    /// the scenario's controller.
     ///
     /// Example: `dsmcosim coupling scenarios/mechanisms/ring12.json -o runs/ring`
     ///
@@ -271,6 +288,8 @@ pub enum Command {
         #[arg(long, value_name = "S")]
         duration: Option<f64>,
     },
+    /// Measure how far runs' bodies move from a reference run.
+    ///
     /// Distance of body positions from a reference run: how long runs of a chaotic scene
     /// stay comparable.
     ///
@@ -294,8 +313,9 @@ pub enum Command {
         #[arg(short, long, value_name = "DIR")]
         out: PathBuf,
     },
-    /// What-if sweep: run a base scenario with fields set from the axes of a sweep file,
-    /// one run per point, in parallel.
+    /// Run a what-if sweep, one run per point, in parallel.
+    ///
+    /// Runs a base scenario with fields set from the axes of a sweep file.
     ///
     /// Example: `dsmcosim sweep scenarios/sweeps/tdma4_slot_layouts.json -o runs/sweep -j 2`
     ///
@@ -329,30 +349,34 @@ pub enum Command {
         #[arg(long, value_enum, default_value = "all")]
         keep: crate::sweep::Keep,
     },
-    /// Join the output directories of a sharded sweep into OUT: checks that they hold
-    /// the same sweep and every point exactly once, then writes sweep.csv, timing.csv
-    /// and the plots as an unsharded run does.
+    /// Join the output directories of a sharded sweep.
+    ///
+    /// Checks that they hold the same sweep and every point exactly once, then writes
+    /// sweep.csv, timing.csv and the plots into --out as an unsharded run does.
     ///
     /// Exit codes: 0 done, 1 I/O failure, 2 different sweeps, a point missing or done
     /// twice, or a directory that is not a sweep's.
     SweepMerge {
         /// Output directory (created if missing).
+        #[arg(short, long, value_name = "DIR")]
         out: PathBuf,
         /// The shards' output directories (`dsmcosim sweep --shard i/n --out DIR`).
         #[arg(required = true, value_name = "SHARD_DIR")]
         shards: Vec<PathBuf>,
     },
-    /// Write the JSON Schemas of scenario and sweep files (scenario.schema.json,
-    /// sweep.schema.json) into DIR, generated from the types that read them; the
-    /// committed copies are in docs/schema/. A file may name its schema in a "$schema"
-    /// key for editors' completion.
+    /// Write the JSON Schemas of scenario and sweep files.
+    ///
+    /// scenario.schema.json and sweep.schema.json into DIR, generated from the types that
+    /// read them; the committed copies are in docs/schema/. A file may name its schema in
+    /// a "$schema" key for editors' completion.
     Schema {
         /// Output directory (created if missing).
         #[arg(short, long, value_name = "DIR")]
         out: PathBuf,
     },
-    /// Print a shell completion script for SHELL on standard output, generated from
-    /// this command line's definition.
+    /// Print a shell completion script.
+    ///
+    /// For SHELL, on standard output, generated from this command line's definition.
     ///
     /// Example: `dsmcosim completions bash > ~/.local/share/bash-completion/completions/dsmcosim`
     /// (zsh: into a directory of $fpath as `_dsmcosim`; fish:
@@ -361,8 +385,10 @@ pub enum Command {
         /// bash, zsh, fish, elvish or powershell.
         shell: clap_complete::Shell,
     },
-    /// Write the manual pages (dsmcosim.1 and one dsmcosim-COMMAND.1 per subcommand),
-    /// generated from this command line's definition, into DIR.
+    /// Write the manual pages.
+    ///
+    /// dsmcosim.1 and one dsmcosim-COMMAND.1 per subcommand, generated from this
+    /// command line's definition, into DIR.
     ///
     /// Example: `dsmcosim man -o ~/.local/share/man/man1 && man dsmcosim-run`.
     Man {
@@ -407,12 +433,16 @@ pub fn main() -> ExitCode {
 /// Writes `dsmcosim.1` and one `dsmcosim-COMMAND.1` per subcommand into `out`
 /// (created if missing), each replaced atomically; returns the paths written.
 fn write_man_pages(out: &std::path::Path) -> crate::Result<Vec<PathBuf>> {
-    let command = <Cli as clap::CommandFactory>::command();
+    let mut command = <Cli as clap::CommandFactory>::command();
+    // Built, the global options (-j, -q, -v) are propagated into every subcommand.
+    command.build();
     crate::output::create_out_dir(out)?;
     let mut pages = vec![("dsmcosim".to_string(), command.clone())];
     for sub in command.get_subcommands().filter(|s| s.get_name() != "help") {
         let name = format!("dsmcosim-{}", sub.get_name());
-        pages.push((name.clone(), sub.clone().name(name)));
+        // The page is dsmcosim-run(1); its synopsis reads `dsmcosim run …`.
+        let synopsis = format!("dsmcosim {}", sub.get_name());
+        pages.push((name.clone(), sub.clone().name(name).bin_name(synopsis)));
     }
     let mut written = Vec::new();
     for (name, page) in pages {

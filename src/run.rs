@@ -152,8 +152,10 @@ pub fn run_with(scenario: &Scenario, out: &Path, options: RunOptions) -> Result<
 }
 
 /// Runs `scenario` as [`run_with`] does and keeps `text`, the scenario as run (overrides
-/// applied), as `out/scenario.json`: beside a finished run's outputs and beside a
-/// diverged run's, which are a result too. `dsmcosim run` and the Python package call it.
+/// applied), as `out/scenario.json`: beside the outputs of every run that wrote them
+/// (finished, diverged, failed numerically or in an FMU, interrupted: each is a result,
+/// and an interrupted one is continued from its checkpoint with its scenario in view).
+/// `dsmcosim run` and the Python package call it.
 pub fn run_keeping_scenario(
     scenario: &Scenario,
     text: &str,
@@ -161,7 +163,15 @@ pub fn run_keeping_scenario(
     options: RunOptions,
 ) -> Result<Outcome> {
     let result = run_with(scenario, out, options);
-    if result.is_ok() || matches!(result, Err(Error::Diverged(_))) {
+    if result.is_ok()
+        || matches!(
+            result,
+            Err(Error::Diverged(_)
+                | Error::Numerical { .. }
+                | Error::Fmu(_)
+                | Error::Interrupted { .. })
+        )
+    {
         write_atomic(&out.join("scenario.json"), text.as_bytes())?;
     }
     result
@@ -192,8 +202,40 @@ pub fn resume(path: &Path, out: &Path, options: RunOptions) -> Result<Outcome> {
             .reattach_network(AtomicFile::create(&path)?)
             .map_err(|e| Error::io(&path, e))?;
     }
+    let name = cp.world.scenario().name.clone();
     let result = finish(out, cp.world, recorder, cp.controller, options);
+    keep_scenario_of_checkpoint(path, out, &name)?;
     stale_removed(&dir, result)
+}
+
+/// A resumed run keeps the scenario it runs as `out/scenario.json`: the one of the run
+/// the checkpoint came from (`RUN/checkpoints/t_….ckpt` beside `RUN/scenario.json`), if
+/// it is there and names the same scenario. A checkpoint moved away from its run leaves
+/// none (the checkpoint holds the model, not the file's text).
+fn keep_scenario_of_checkpoint(checkpoint: &Path, out: &Path, name: &str) -> Result<()> {
+    let Some(source) = checkpoint
+        .parent()
+        .and_then(Path::parent)
+        .map(|run| run.join("scenario.json"))
+    else {
+        return Ok(());
+    };
+    let target = out.join("scenario.json");
+    let same_file = std::fs::canonicalize(&source).ok() == std::fs::canonicalize(&target).ok();
+    if same_file {
+        return Ok(()); // resumed into its own run directory: it is there already
+    }
+    let Ok(text) = crate::input::read_text(&source) else {
+        return Ok(());
+    };
+    let names_it = serde_json::from_str::<serde_json::Value>(&text)
+        .ok()
+        .and_then(|v| v.get("name").and_then(|n| n.as_str()).map(|n| n == name))
+        .unwrap_or(false);
+    if names_it {
+        write_atomic(&target, text.as_bytes())?;
+    }
+    Ok(())
 }
 
 /// Runs the world from where it is to its end, then writes every output.

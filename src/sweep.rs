@@ -62,7 +62,7 @@
 //! error. With it, a point whose `done.json` records the same axis values, seed and
 //! scenario text is skipped; any other is rerun. `--shard i/n` runs the points
 //! `k` with `k mod n = i − 1` and writes the tables of those rows only;
-//! `sweep-merge OUT DIR...` checks that the shard directories hold the same sweep
+//! `sweep-merge --out OUT DIR...` checks that the shard directories hold the same sweep
 //! definition and base, and every point exactly once, then writes `OUT/sweep.csv`,
 //! `timing.csv` and the plots with the same function as an unsharded run.
 

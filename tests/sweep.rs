@@ -184,7 +184,7 @@ fn sharded_and_merged_equals_unsharded() {
     assert_eq!(column(&shard1, "index"), ["0", "2", "4"]);
 
     // One shard alone is not the whole sweep.
-    let out = dsmcosim(&[Path::new("sweep-merge"), &merged, &s1]);
+    let out = dsmcosim(&[Path::new("sweep-merge"), Path::new("--out"), &merged, &s1]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(
@@ -193,7 +193,7 @@ fn sharded_and_merged_equals_unsharded() {
     );
 
     ok(&[&"sweep", &sweep, &"--out", &s2, &"--shard", &"2/2"]);
-    let said = ok(&[&"sweep-merge", &merged, &s1, &s2]);
+    let said = ok(&[&"sweep-merge", &"--out", &merged, &s1, &s2]);
     assert!(
         said.contains("merged 6 points from 2 directories"),
         "{said}"
@@ -209,7 +209,13 @@ fn sharded_and_merged_equals_unsharded() {
     let cost = v["row"]["mean_cost"].as_f64().expect("a mean cost");
     v["row"]["mean_cost"] = json!(cost * 0.5);
     std::fs::write(&done, serde_json::to_string(&v).unwrap()).unwrap();
-    let out = dsmcosim(&[Path::new("sweep-merge"), &dir.join("m1"), &s1, &s2]);
+    let out = dsmcosim(&[
+        Path::new("sweep-merge"),
+        Path::new("-o"),
+        &dir.join("m1"),
+        &s1,
+        &s2,
+    ]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(
@@ -219,7 +225,14 @@ fn sharded_and_merged_equals_unsharded() {
     std::fs::write(&done, text).unwrap();
 
     // The same shard twice, and shards of another sweep, are refused.
-    let out = dsmcosim(&[Path::new("sweep-merge"), &dir.join("m2"), &s1, &s2, &full]);
+    let out = dsmcosim(&[
+        Path::new("sweep-merge"),
+        Path::new("-o"),
+        &dir.join("m2"),
+        &s1,
+        &s2,
+        &full,
+    ]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("done in two shard directories"), "{err}");
@@ -228,7 +241,13 @@ fn sharded_and_merged_equals_unsharded() {
     let other_sweep = write_sweep(&dir, "other.json", &other);
     let s2b = dir.join("s2b");
     ok(&[&"sweep", &other_sweep, &"--out", &s2b, &"--shard", &"2/2"]);
-    let out = dsmcosim(&[Path::new("sweep-merge"), &dir.join("m3"), &s1, &s2b]);
+    let out = dsmcosim(&[
+        Path::new("sweep-merge"),
+        Path::new("-o"),
+        &dir.join("m3"),
+        &s1,
+        &s2b,
+    ]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("shards of different sweeps"), "{err}");

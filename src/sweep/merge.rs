@@ -1,4 +1,4 @@
-//! `dsmcosim sweep-merge OUT SHARD_DIR...`: the `done.json` records of every shard's
+//! `dsmcosim sweep-merge --out OUT SHARD_DIR...`: the `done.json` records of every shard's
 //! output directory, checked and written out as one sweep, with the same bytes of
 //! `sweep.csv` as an unsharded run.
 

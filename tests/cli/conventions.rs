@@ -88,6 +88,17 @@ fn completions_and_man_pages_come_from_the_definition() {
         run_page.contains("checkpoint"),
         "the run page carries its options"
     );
+    // Its synopsis is the command a user types, with the global options it takes.
+    let synopsis = run_page
+        .split(".SH SYNOPSIS")
+        .nth(1)
+        .and_then(|s| s.split(".SH").next())
+        .expect("a synopsis");
+    assert!(synopsis.contains("dsmcosim run"), "{synopsis}");
+    assert!(!synopsis.contains("dsmcosim\\-run"), "{synopsis}");
+    for global in ["jobs", "quiet", "verbose"] {
+        assert!(synopsis.contains(global), "{global} in {synopsis}");
+    }
 }
 
 #[test]
@@ -256,6 +267,8 @@ fn ctrl_c_stops_a_run_cleanly_and_says_how_to_continue() {
         "{e}"
     );
     assert_eq!(summary(&out)["status"], json!("interrupted"));
+    // The scenario as run stays beside the outputs, as after a finished run.
+    assert!(out.join("scenario.json").is_file(), "no scenario.json");
     assert!(
         !has_temporary(&out),
         "a temporary file was left in {}",
@@ -473,4 +486,36 @@ fn a_file_of_another_kind_is_named_for_what_it_is() {
         "{e}"
     );
     assert!(!e.contains("--force"), "{e}");
+}
+
+/// A resumed run keeps the scenario it runs beside its outputs: the scenario.json of the
+/// run its checkpoint came from.
+#[test]
+fn a_resumed_run_keeps_its_scenario() {
+    let dir = scratch("conventions_resume_scenario");
+    let (first, second) = (dir.join("first"), dir.join("second"));
+    let scenario = repo().join("scenarios/grid16_monolithic.json");
+    let o = run(&[
+        "run",
+        scenario.to_str().unwrap(),
+        "-o",
+        first.to_str().unwrap(),
+        "--set",
+        "/duration=1",
+        "--checkpoint-every",
+        "0.5",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", said(&o));
+    let checkpoint = first.join("checkpoints/t_000000.500000000.ckpt");
+    let o = run(&[
+        "resume",
+        checkpoint.to_str().unwrap(),
+        "-o",
+        second.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", said(&o));
+    assert_eq!(
+        std::fs::read_to_string(second.join("scenario.json")).expect("scenario.json"),
+        std::fs::read_to_string(first.join("scenario.json")).expect("the first's")
+    );
 }

@@ -448,8 +448,10 @@ fn a_failed_allocation_of_the_solve_is_out_of_memory_not_a_divergence() {
     let dir = scratch("limits-oom");
     let n = 5000;
     let bodies: Vec<_> = (0..n)
-        .map(|i| json!({"id": i + 1, "mass": 1.0, "size": 0.1, "position": [i as f64, 0, 0],
-                        "angular_velocity": [0, 0, 0.001]}))
+        .map(|i| {
+            json!({"id": i + 1, "mass": 1.0, "size": 0.1, "position": [i as f64, 0, 0],
+                        "angular_velocity": [0, 0, 0.001]})
+        })
         .collect();
     let joints: Vec<_> = (0..n - 1)
         .map(|i| json!({"type": "weld", "a": i + 1, "b": i + 2, "at": [i as f64 + 0.5, 0, 0]}))
@@ -488,5 +490,8 @@ fn a_failed_allocation_of_the_solve_is_out_of_memory_not_a_divergence() {
             other => panic!("ulimit -v {kb}: exit {other:?}: {err}"),
         }
     }
-    assert!(in_the_solve > 0, "no limit landed in the solve's allocations");
+    assert!(
+        in_the_solve > 0,
+        "no limit landed in the solve's allocations"
+    );
 }

@@ -351,6 +351,19 @@ fn every_subcommand_has_help() {
     let top = run(&["--help"]);
     assert!(top.status.success(), "{}", said(&top));
     let listing = String::from_utf8_lossy(&top.stdout).into_owned();
+    // One line per subcommand, as cargo's and rg's (the details are in its own --help).
+    let commands = listing
+        .split("Commands:")
+        .nth(1)
+        .and_then(|rest| rest.split("\n\n").next())
+        .expect("a Commands section");
+    for line in commands.lines().filter(|l| !l.trim().is_empty()) {
+        assert!(line.chars().count() <= 80, "a long summary line: {line:?}");
+    }
+    assert!(listing
+        .lines()
+        .next()
+        .is_some_and(|l| l.chars().count() <= 100));
     let subcommands = [
         "validate",
         "run",

@@ -495,12 +495,10 @@ fn no_command_replaces_a_users_file_in_a_directory_it_has_not_claimed() {
         let out = dir.join(format!("case{i}"));
         std::fs::create_dir_all(&out).expect("mkdir");
         std::fs::write(out.join(theirs), "the user's own\n").expect("write");
+        args.extend(["--out".into(), out.display().to_string()]);
         if args[0] == "sweep-merge" {
-            // OUT, then a shard (never read: the refusal comes first).
-            args.push(out.display().to_string());
+            // A shard, never read: the refusal comes first.
             args.push(dir.join("no-shard").display().to_string());
-        } else {
-            args.extend(["--out".into(), out.display().to_string()]);
         }
         let argv: Vec<&str> = args.iter().map(String::as_str).collect();
         let o = run(&argv);
