@@ -550,13 +550,27 @@ fn run_options(
 }
 
 fn report(name: &str, outcome: &crate::run::Outcome, out: &std::path::Path) {
+    // Only what the scene has: no |w| without constraints, the cost in its own unit.
+    let w = if outcome.rows > 0 {
+        format!("max |w| = {:.3e} m; ", outcome.max_constraint_violation)
+    } else {
+        String::new()
+    };
+    let cost = if outcome.signal_cost {
+        format!(
+            "mean cost = {:.3e} (RMS of measurement.signals); ",
+            outcome.mean_cost
+        )
+    } else if outcome.rows > 0 {
+        format!("mean cost = {:.3e} m; ", outcome.mean_cost)
+    } else {
+        String::new() // no links and no signals: nothing is measured as a cost
+    };
     say!(
-        "{}: {} steps in {:.3} s wall; max |w| = {:.3e} m; mean cost = {:.3e} m; digest {}",
+        "{}: {} steps in {:.3} s wall; {w}{cost}digest {}",
         name,
         outcome.steps,
         outcome.wall_seconds,
-        outcome.max_constraint_violation,
-        outcome.mean_cost,
         outcome.digest
     );
     say!("wrote {}", out.display());

@@ -39,8 +39,15 @@ pub struct Outcome {
     pub steps: u64,
     /// Largest `|w|` over the run [m].
     pub max_constraint_violation: f64,
-    /// Mean window cost [m].
+    /// Mean window cost: [m] for the links' `Σ RMS w`, the signals' own unit for
+    /// `measurement.signals`.
     pub mean_cost: f64,
+    /// Constraint rows of the scene (links and joints' rows): none, and there is no
+    /// `|w|` to report.
+    pub rows: usize,
+    /// Whether the cost is `measurement.signals`' (in the signals' units), not the
+    /// links' [m].
+    pub signal_cost: bool,
     /// Wall-clock seconds the simulation took (not part of anything digested).
     pub wall_seconds: f64,
     /// Messages delivered between nodes.
@@ -269,6 +276,8 @@ fn finish(
         steps: world.steps_done().saturating_sub(1),
         max_constraint_violation: world.max_violation(),
         mean_cost: world.mean_cost(),
+        rows: world.scenario().links.len(),
+        signal_cost: !world.scenario().cost_signals.is_empty(),
         wall_seconds,
         messages: world.messages(),
         events: world.events(),

@@ -294,7 +294,9 @@ impl LayerWatch {
         (self.outside > 0).then(|| {
             format!(
                 "max |w| left the SMC boundary layer ε = {} m on {} of {} steps ({:.3} %); \
-                 worst |w| = {:.3e} m at t = {} s (summary.json: boundary_layer)",
+                 worst |w| = {:.3e} m at t = {} s (summary.json: boundary_layer). The \
+                 law's bounds hold inside the layer; RK4, a larger K or a smaller μ keeps a \
+                 run there (docs/accuracy.md: choosing speed or accuracy)",
                 self.epsilon,
                 self.outside,
                 self.steps,

@@ -72,6 +72,12 @@ fn the_own_fmu_example_builds_runs_and_follows_its_closed_form() {
         .output()
         .expect("dsmcosim");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // A scene of an FMU alone reports what it has: no |w|, no cost of links.
+    let said = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        said.starts_with("lag: 2000 steps in ") && !said.contains("|w|") && !said.contains("cost"),
+        "{said}"
+    );
     let trace = std::fs::read_to_string(out.join("trace.csv")).expect("trace.csv");
     let mut lines = trace.lines();
     let header: Vec<&str> = lines.next().expect("header").split(',').collect();
