@@ -15,7 +15,8 @@
 //! `#<index>`.
 //!
 //! A point whose run diverged is not data: it is left out of every mean, bar and
-//! heatmap cell, drawn as a black cross at the cost it had reached, and counted in the
+//! heatmap cell, drawn as a black cross at the top of the data (no higher than the cost
+//! it had reached: its value would stretch the axis over the data), and counted in the
 //! legend (`diverged: 6 of 600 points`) and, on the heatmap, in the title.
 
 use std::collections::BTreeMap;
@@ -253,9 +254,30 @@ fn cost_vs(out: &Path, plan: &Plan, records: &[Record], metric: &Metric) -> Resu
         })
         .collect();
     if !failed.is_empty() {
+        // Drawn at the data's top edge, not at the cost a run had reached when it
+        // diverged: those values (10-100x the data) stretched the axis until the
+        // layouts' lines were one band.
+        let top = series
+            .iter()
+            .flat_map(|s| {
+                s.points
+                    .iter()
+                    .map(|p| p.1)
+                    .chain(s.bars.iter().map(|b| b.2))
+            })
+            .filter(|y| y.is_finite())
+            .fold(f64::NEG_INFINITY, f64::max);
+        let failed = if top.is_finite() {
+            failed
+                .into_iter()
+                .map(|(x, y)| (x, if y.is_finite() { y.min(top) } else { top }))
+                .collect()
+        } else {
+            failed
+        };
         series.push(Series::crosses(
             format!(
-                "diverged: {} of {} points (left out; value until divergence)",
+                "diverged: {} of {} points (left out; at the cost reached, capped at the top)",
                 failed.len(),
                 records.len()
             ),
