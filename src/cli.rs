@@ -390,11 +390,16 @@ pub enum Command {
     /// dsmcosim.1 and one dsmcosim-COMMAND.1 per subcommand, generated from this
     /// command line's definition, into DIR.
     ///
-    /// Example: `dsmcosim man -o ~/.local/share/man/man1 && man dsmcosim-run`.
+    /// Example: `dsmcosim man -o ~/.local/share/man/man1 && man dsmcosim-run`, or one
+    /// page on standard output: `dsmcosim man run | man -l -`.
     Man {
-        /// Output directory (created if missing).
+        /// Output directory (created if missing) for every page; without it, the page
+        /// of COMMAND (or the top page) goes to standard output.
         #[arg(short, long, value_name = "DIR")]
-        out: PathBuf,
+        out: Option<PathBuf>,
+        /// The subcommand whose page to print (without -o); default the top page.
+        #[arg(value_name = "COMMAND", conflicts_with = "out")]
+        page: Option<String>,
     },
 }
 
@@ -433,19 +438,9 @@ pub fn main() -> ExitCode {
 /// Writes `dsmcosim.1` and one `dsmcosim-COMMAND.1` per subcommand into `out`
 /// (created if missing), each replaced atomically; returns the paths written.
 fn write_man_pages(out: &std::path::Path) -> crate::Result<Vec<PathBuf>> {
-    let mut command = <Cli as clap::CommandFactory>::command();
-    // Built, the global options (-j, -q, -v) are propagated into every subcommand.
-    command.build();
     crate::output::create_out_dir(out)?;
-    let mut pages = vec![("dsmcosim".to_string(), command.clone())];
-    for sub in command.get_subcommands().filter(|s| s.get_name() != "help") {
-        let name = format!("dsmcosim-{}", sub.get_name());
-        // The page is dsmcosim-run(1); its synopsis reads `dsmcosim run …`.
-        let synopsis = format!("dsmcosim {}", sub.get_name());
-        pages.push((name.clone(), sub.clone().name(name).bin_name(synopsis)));
-    }
     let mut written = Vec::new();
-    for (name, page) in pages {
+    for (name, page) in man_pages() {
         let path = out.join(format!("{name}.1"));
         let mut roff = Vec::new();
         clap_mangen::Man::new(page)
@@ -455,6 +450,21 @@ fn write_man_pages(out: &std::path::Path) -> crate::Result<Vec<PathBuf>> {
         written.push(path);
     }
     Ok(written)
+}
+
+/// The manual pages by name: `dsmcosim`, then one `dsmcosim-COMMAND` per subcommand.
+fn man_pages() -> Vec<(String, clap::Command)> {
+    let mut command = <Cli as clap::CommandFactory>::command();
+    // Built, the global options (-j, -q, -v) are propagated into every subcommand.
+    command.build();
+    let mut pages = vec![("dsmcosim".to_string(), command.clone())];
+    for sub in command.get_subcommands().filter(|s| s.get_name() != "help") {
+        let name = format!("dsmcosim-{}", sub.get_name());
+        // The page is dsmcosim-run(1); its synopsis reads `dsmcosim run …`.
+        let synopsis = format!("dsmcosim {}", sub.get_name());
+        pages.push((name.clone(), sub.clone().name(name).bin_name(synopsis)));
+    }
+    pages
 }
 
 /// `--verbose` (read by `run`).
@@ -799,11 +809,35 @@ pub fn execute(command: Command) -> crate::Result<()> {
             say!("{}", String::from_utf8_lossy(&script).trim_end());
             Ok(())
         }
-        Command::Man { out } => {
+        Command::Man {
+            out: Some(out),
+            page: _,
+        } => {
             for path in write_man_pages(&out)? {
                 say!("wrote {}", path.display());
             }
             Ok(())
+        }
+        Command::Man { out: None, page } => {
+            let want = page.map_or("dsmcosim".to_string(), |p| format!("dsmcosim-{p}"));
+            let pages = man_pages();
+            let Some((_, command)) = pages.into_iter().find(|(name, _)| *name == want) else {
+                return Err(crate::Error::invalid(
+                    "COMMAND",
+                    format!(
+                        "no subcommand `{}` (dsmcosim --help lists them)",
+                        want.trim_start_matches("dsmcosim-")
+                    ),
+                ));
+            };
+            let mut roff = Vec::new();
+            clap_mangen::Man::new(command)
+                .render(&mut roff)
+                .map_err(|e| crate::Error::io("<stdout>", e))?;
+            use std::io::Write as _;
+            std::io::stdout()
+                .write_all(&roff)
+                .map_err(|e| crate::Error::io("<stdout>", e))
         }
         Command::Tradeoff {
             scenario,

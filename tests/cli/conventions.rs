@@ -99,6 +99,17 @@ fn completions_and_man_pages_come_from_the_definition() {
     for global in ["jobs", "quiet", "verbose"] {
         assert!(synopsis.contains(global), "{global} in {synopsis}");
     }
+    // One page on standard output, the same bytes as the file.
+    let o = run(&["man", "run"]);
+    assert!(o.status.success(), "{}", said(&o));
+    assert_eq!(String::from_utf8_lossy(&o.stdout), run_page);
+    let o = run(&["man", "nosuch"]);
+    assert_eq!(o.status.code(), Some(2), "{}", said(&o));
+    assert!(
+        said(&o).contains("COMMAND: no subcommand `nosuch`"),
+        "{}",
+        said(&o)
+    );
 }
 
 #[test]
