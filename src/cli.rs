@@ -888,6 +888,7 @@ pub fn execute(command: Command) -> crate::Result<()> {
             keep,
         } => {
             expect_kind(&sweep, FileKind::Sweep, "sweep")?;
+            crate::interrupt::install();
             let shard = shard
                 .as_deref()
                 .map(crate::sweep::Shard::parse)

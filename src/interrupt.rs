@@ -5,9 +5,10 @@
 //! Without this a Ctrl-C killed the process mid-write, left a `.trace.csv.tmp.*` file
 //! until the next run and said nothing. A second Ctrl-C exits at once (130).
 //!
-//! Only `run` and `resume` install the handler; every other command keeps the default
-//! (the process ends at once), which `sweep --resume` relies on: an interrupted sweep
-//! point must not look finished.
+//! `sweep` installs it too: no point starts after it, the running points stop as a run
+//! does (marked interrupted, without their done.json, so `sweep --resume` reruns them),
+//! and the sweep exits 130 counting the points finished and giving the `--resume`
+//! command. Every other command keeps the default (the process ends at once).
 
 use std::sync::atomic::{AtomicBool, Ordering};
 

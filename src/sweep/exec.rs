@@ -406,6 +406,11 @@ pub fn run(sweep_path: &Path, out: &Path, options: &Options) -> Result<Report> {
     let results: Vec<Result<()>> = to_run
         .par_iter()
         .map(|p| {
+            // After Ctrl-C (the handler `dsmcosim sweep` installs) no point starts; the
+            // running ones stop at their slice, marked interrupted, without done.json.
+            if crate::interrupt::requested() {
+                return Ok(());
+            }
             let r = run_point(out, &loaded, p, options.keep);
             let n = finished.fetch_add(1, Ordering::Relaxed) + 1;
             if let Ok(mut bar) = progress.lock() {
@@ -416,6 +421,22 @@ pub fn run(sweep_path: &Path, out: &Path, options: &Options) -> Result<Report> {
         .collect();
     if let Ok(bar) = progress.lock() {
         bar.finish();
+    }
+    if crate::interrupt::requested() {
+        let done = to_run
+            .iter()
+            .filter(|p| point_dir(out, &p.key).join(DONE).is_file())
+            .count();
+        return Err(Error::Checks {
+            message: format!(
+                "interrupted: {done} of the {} points to run finished (each with its \
+                 done.json); `dsmcosim sweep {} --out {} --resume` runs the rest",
+                to_run.len(),
+                sweep_path.display(),
+                out.display()
+            ),
+            code: 130,
+        });
     }
     results.into_iter().collect::<Result<Vec<()>>>()?;
     let records = selected

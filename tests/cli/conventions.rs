@@ -530,3 +530,68 @@ fn a_resumed_run_keeps_its_scenario() {
         std::fs::read_to_string(first.join("scenario.json")).expect("the first's")
     );
 }
+
+/// Ctrl-C on a sweep: no point starts after it, the running ones stop unmarked as done,
+/// and the sweep exits 130 counting what finished and giving the `--resume` command,
+/// which then runs the rest to the full table.
+#[test]
+fn ctrl_c_on_a_sweep_says_how_to_resume_it() {
+    let dir = scratch("conventions_ctrl_c_sweep");
+    let out = dir.join("out");
+    let sweep = repo().join("scenarios/sweeps/tdma4_slot_layouts.json");
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_dsmcosim"))
+        .args([
+            "sweep",
+            sweep.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .args(["--keep", "summary", "-j", "1"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    let done = |out: &std::path::Path| {
+        std::fs::read_dir(out.join("points")).map_or(0, |entries| {
+            entries
+                .filter_map(|e| e.ok())
+                .filter(|e| e.path().join("done.json").is_file())
+                .count()
+        })
+    };
+    // A hang guard, not a time assertion: at most 15 000 polls 20 ms apart.
+    let mut polls = 0;
+    while done(&out) < 3 {
+        polls += 1;
+        assert!(polls < 15_000, "no point finished");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    // SAFETY: kill(2) on the child's pid, which has not been waited for.
+    let rc = unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGINT) };
+    assert_eq!(rc, 0);
+    let o = child.wait_with_output().expect("wait");
+    assert_eq!(o.status.code(), Some(130), "{}", said(&o));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("interrupted: ")
+            && e.contains("points to run finished")
+            && e.contains("--resume"),
+        "{e}"
+    );
+    assert!(
+        !out.join("sweep.csv").exists(),
+        "an interrupted sweep wrote its table"
+    );
+    let o = run(&[
+        "sweep",
+        sweep.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--keep",
+        "summary",
+        "--resume",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", said(&o));
+    let table = std::fs::read_to_string(out.join("sweep.csv")).expect("sweep.csv");
+    assert_eq!(table.lines().count(), 601, "the header and every point");
+}
