@@ -311,21 +311,29 @@ impl RunPlan {
     /// The plan as text, one fact per line.
     pub fn text(&self) -> String {
         let mut out = Vec::new();
-        out.push(format!(
-            "{} bodies, {} links, {} forces; {} steps of {} s ({} s); {} path, {} integrator",
-            self.bodies,
-            self.links,
-            self.forces,
-            self.cost.steps,
-            self.dt,
-            self.duration,
-            self.body_model,
-            self.integrator
-        ));
-        out.push(format!(
-            "stabilizer {}; solver {}",
-            self.stabilizer, self.solver
-        ));
+        if self.bodies == 0 {
+            // A scene of FMUs only: no body model, integrator, law or solve runs.
+            out.push(format!(
+                "no bodies; {} steps of {} s ({} s)",
+                self.cost.steps, self.dt, self.duration
+            ));
+        } else {
+            out.push(format!(
+                "{} bodies, {} links, {} forces; {} steps of {} s ({} s); {} path, {} integrator",
+                self.bodies,
+                self.links,
+                self.forces,
+                self.cost.steps,
+                self.dt,
+                self.duration,
+                self.body_model,
+                self.integrator
+            ));
+            out.push(format!(
+                "stabilizer {}; solver {}",
+                self.stabilizer, self.solver
+            ));
+        }
         if self.nodes.len() > 1 {
             out.push(format!(
                 "{} nodes, coupling {}:",

@@ -78,6 +78,21 @@ fn the_own_fmu_example_builds_runs_and_follows_its_closed_form() {
         said.starts_with("lag: 2000 steps in ") && !said.contains("|w|") && !said.contains("cost"),
         "{said}"
     );
+    // Its plan likewise: no body model, integrator, law or solve.
+    let plan = Command::new(env!("CARGO_BIN_EXE_dsmcosim"))
+        .args(["validate", "lag/lag.json"])
+        .current_dir(root)
+        .output()
+        .expect("dsmcosim");
+    let plan = String::from_utf8_lossy(&plan.stdout);
+    assert!(
+        plan.contains("ok — no bodies; 2000 steps of 0.001 s"),
+        "{plan}"
+    );
+    assert!(
+        !plan.contains("stabilizer") && !plan.contains("integrator"),
+        "{plan}"
+    );
     let trace = std::fs::read_to_string(out.join("trace.csv")).expect("trace.csv");
     let mut lines = trace.lines();
     let header: Vec<&str> = lines.next().expect("header").split(',').collect();
