@@ -12,7 +12,7 @@ use serde_json::json;
 
 #[path = "support/memory_grid.rs"]
 mod memory_grid;
-use memory_grid::memory_grid;
+use memory_grid::{joint_chain, memory_grid};
 
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_dsmcosim"))
@@ -40,22 +40,6 @@ fn estimated_mb(file: &str) -> u64 {
     let text = String::from_utf8_lossy(&o.stdout).into_owned();
     let at = text.find("needs about ").expect("an estimate") + "needs about ".len();
     text[at..].split(' ').next().unwrap().parse().expect("MB")
-}
-
-/// A chain of `n` bodies on `kind` joints (weld: 6 rows each, ball: 3), 10 steps, the
-/// exact solve: three to six rows per body where a grid has two.
-fn joint_chain(n: usize, kind: &str) -> serde_json::Value {
-    let bodies: Vec<_> = (0..n)
-        .map(|i| {
-            json!({"id": i + 1, "mass": 1.0, "size": 0.1, "position": [i as f64, 0, 0],
-                        "angular_velocity": [0, 0, 0.001]})
-        })
-        .collect();
-    let joints: Vec<_> = (0..n - 1)
-        .map(|i| json!({"type": kind, "a": i + 1, "b": i + 2, "at": [i as f64 + 0.5, 0, 0]}))
-        .collect();
-    json!({"name": format!("{kind}_chain"), "seed": 1, "duration": 0.01, "dt": 0.001,
-           "model": {"bodies": bodies, "joints": joints}, "output": {"decimation": 10}})
 }
 
 /// The memory estimate bounds the measured peak resident memory (the child's own

@@ -943,12 +943,16 @@ impl CoSim {
             }
         }
         self.max_violation = self.max_violation.max(max);
+        // One pass over the bodies: position and velocity, then (rigid bodies) the
+        // rotation, which a link through the centre does not feel.
         for (b, (p, v)) in self.p.iter().zip(&self.v).enumerate() {
             if !body_finite(p, v) {
                 return Err(self.body_diverged(t, b));
             }
+            if let Some(what) = self.rotation_fault(b) {
+                return Err(self.rotation_diverged(t, b, what));
+            }
         }
-        self.check_rotations(t)?;
         Ok(max)
     }
 
@@ -1030,27 +1034,40 @@ impl CoSim {
         }
     }
 
-    /// The gathered rotations at `t` (empty on point masses): a torque too large for
-    /// `f64` spins a body to an infinite rate while a link through its centre feels
-    /// nothing, so the links alone would not see it.
+    /// The gathered rotations at `t` (empty on point masses), after the parallel gather
+    /// of positions and velocities: a torque too large for `f64` spins a body to an
+    /// infinite rate while a link through its centre feels nothing, so the links alone
+    /// would not see it.
     fn check_rotations(&self, t: SimTime) -> Result<()> {
-        let finite = |x: &[f64]| x.iter().all(|v| v.is_finite());
-        for (b, (q, w)) in self.q.iter().zip(&self.omega).enumerate() {
-            let what = if !finite(w.as_slice()) {
-                "angular velocity"
-            } else if !finite(q.coords.as_slice()) {
-                "orientation"
-            } else {
-                continue;
-            };
-            return Err(Error::Diverged(Divergence {
-                time: t,
-                node: self.body_home[b].0 + 1,
-                place: Place::Body(self.scenario.bodies[b].id),
-                what: format!("non-finite {what} (the loads on it overflow f64)"),
-            }));
+        for b in 0..self.q.len() {
+            if let Some(what) = self.rotation_fault(b) {
+                return Err(self.rotation_diverged(t, b, what));
+            }
         }
         Ok(())
+    }
+
+    /// Which of body `b`'s gathered rotation quantities is not finite (none on point
+    /// masses, which gather no rotation).
+    fn rotation_fault(&self, b: usize) -> Option<&'static str> {
+        let finite = |x: &[f64]| x.iter().all(|v| v.is_finite());
+        if self.omega.get(b).is_some_and(|w| !finite(w.as_slice())) {
+            Some("angular velocity")
+        } else if self.q.get(b).is_some_and(|q| !finite(q.coords.as_slice())) {
+            Some("orientation")
+        } else {
+            None
+        }
+    }
+
+    /// Body `b`'s `what` (a rotation quantity) is not finite at `t`.
+    fn rotation_diverged(&self, t: SimTime, b: usize, what: &str) -> Error {
+        Error::Diverged(Divergence {
+            time: t,
+            node: self.body_home[b].0 + 1,
+            place: Place::Body(self.scenario.bodies[b].id),
+            what: format!("non-finite {what} (the loads on it overflow f64)"),
+        })
     }
 
     /// Link `l` diverged at `t`: `what`.

@@ -13,7 +13,7 @@ use super::{bin, said, scratch, shipped, write_json};
 
 #[path = "../support/memory_grid.rs"]
 mod memory_grid;
-use memory_grid::memory_grid;
+use memory_grid::{joint_chain, memory_grid};
 
 /// Runs `dsmcosim args…`, killing it after `limit` (then the test fails).
 pub(super) fn bounded(args: &[&str], limit: Duration) -> Output {
@@ -446,22 +446,7 @@ fn an_address_space_limit_below_the_estimate_refuses_the_run_up_front() {
 #[test]
 fn a_failed_allocation_of_the_solve_is_out_of_memory_not_a_divergence() {
     let dir = scratch("limits-oom");
-    let n = 5000;
-    let bodies: Vec<_> = (0..n)
-        .map(|i| {
-            json!({"id": i + 1, "mass": 1.0, "size": 0.1, "position": [i as f64, 0, 0],
-                        "angular_velocity": [0, 0, 0.001]})
-        })
-        .collect();
-    let joints: Vec<_> = (0..n - 1)
-        .map(|i| json!({"type": "weld", "a": i + 1, "b": i + 2, "at": [i as f64 + 0.5, 0, 0]}))
-        .collect();
-    let file = write_json(
-        &dir,
-        "welds.json",
-        &json!({"name": "welds", "seed": 1, "duration": 0.01, "dt": 0.001,
-                "model": {"bodies": bodies, "joints": joints}, "output": {"decimation": 10}}),
-    );
+    let file = write_json(&dir, "welds.json", &joint_chain(5000, "weld"));
     let exe = env!("CARGO_BIN_EXE_dsmcosim");
     let mut in_the_solve = 0;
     for kb in (66_000..=82_000).step_by(2_000) {

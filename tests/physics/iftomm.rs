@@ -140,7 +140,7 @@ fn bricards_mechanism_a04_drops_its_dependent_row_and_moves_with_one_degree_of_f
     eprintln!(
         "A04 Bricard over {} s: energy within {worst_energy:.3e} J while {moved:.2} J moved \
          between potential and kinetic; joint 1 turned up to {:.1}°; joints two apart turned alike to \
-         within {worst_pair:.3e} rad; rows within {worst_w:.3e} m",
+         {worst_pair:.3e} in cosine; rows within {worst_w:.3e} m",
         s.duration.as_secs_f64(),
         widest.to_degrees()
     );

@@ -236,10 +236,7 @@ fn a_double_pendulum_keeps_its_energy() {
     let energy = |st: &dsmcosim::multibody::State| -> f64 {
         (0..2)
             .map(|i| {
-                let r = UnitQuaternion::new_normalize(st.q[i]).to_rotation_matrix();
-                let inertia = r.matrix()
-                    * nalgebra::Matrix3::from_diagonal(&s.bodies[i].inertia)
-                    * r.matrix().transpose();
+                let inertia = super::world_inertia(&s, st, i);
                 0.5 * st.v[i].norm_squared()
                     + 0.5 * st.omega[i].dot(&(inertia * st.omega[i]))
                     + G * st.p[i].z

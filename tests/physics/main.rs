@@ -37,15 +37,20 @@ fn shipped(name: &str) -> Value {
     v
 }
 
+/// Body `i`'s inertia tensor about its centre in world axes, `R I Rᵀ` [kg·m²].
+fn world_inertia(s: &Scenario, st: &State, i: usize) -> Matrix3<f64> {
+    let r = UnitQuaternion::new_normalize(st.q[i]).to_rotation_matrix();
+    r.matrix() * Matrix3::from_diagonal(&s.bodies[i].inertia) * r.matrix().transpose()
+}
+
 /// Kinetic energy of every body of `s` in `st` [J].
 fn kinetic_energy(s: &Scenario, st: &State) -> f64 {
     s.bodies
         .iter()
         .enumerate()
         .map(|(i, b)| {
-            let r = UnitQuaternion::new_normalize(st.q[i]).to_rotation_matrix();
-            let inertia = r.matrix() * Matrix3::from_diagonal(&b.inertia) * r.matrix().transpose();
-            0.5 * b.mass * st.v[i].norm_squared() + 0.5 * st.omega[i].dot(&(inertia * st.omega[i]))
+            0.5 * b.mass * st.v[i].norm_squared()
+                + 0.5 * st.omega[i].dot(&(world_inertia(s, st, i) * st.omega[i]))
         })
         .sum()
 }
@@ -65,11 +70,7 @@ fn angular_momentum(s: &Scenario, st: &State) -> Vector3<f64> {
     s.bodies
         .iter()
         .enumerate()
-        .map(|(i, b)| {
-            let r = UnitQuaternion::new_normalize(st.q[i]).to_rotation_matrix();
-            let inertia = r.matrix() * Matrix3::from_diagonal(&b.inertia) * r.matrix().transpose();
-            st.p[i].cross(&st.v[i]) * b.mass + inertia * st.omega[i]
-        })
+        .map(|(i, b)| st.p[i].cross(&st.v[i]) * b.mass + world_inertia(s, st, i) * st.omega[i])
         .sum()
 }
 
@@ -157,12 +158,7 @@ fn free_body_keeps_linear_and_angular_momentum_with_asymmetric_inertia() {
         }
     }));
     let b = &s.bodies[0];
-    let momentum = |st: &State| {
-        let r = UnitQuaternion::new_normalize(st.q[0]).to_rotation_matrix();
-        let i_world =
-            r.matrix() * nalgebra::Matrix3::from_diagonal(&b.inertia) * r.matrix().transpose();
-        i_world * st.omega[0]
-    };
+    let momentum = |st: &State| world_inertia(&s, st, 0) * st.omega[0];
     let l0 = momentum(&State::initial(&s));
     let mut omega_turned: f64 = 0.0;
     let w0 = b.angular_velocity;

@@ -7,7 +7,7 @@ use std::f64::consts::PI;
 
 use dsmcosim::multibody::spring;
 use dsmcosim::multibody::State;
-use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+use nalgebra::{UnitQuaternion, Vector3};
 use serde_json::{json, Value};
 
 use super::{scenario, simulate};
@@ -95,10 +95,7 @@ fn a_free_pair_on_a_spring_keeps_momentum_angular_momentum_and_energy() {
                          "stiffness": 20.0, "length": 1.0}]
         }
     }));
-    let inertia = |i: usize, st: &State| {
-        let r = UnitQuaternion::new_normalize(st.q[i]).to_rotation_matrix();
-        r.matrix() * Matrix3::from_diagonal(&s.bodies[i].inertia) * r.matrix().transpose()
-    };
+    let inertia = |i: usize, st: &State| super::world_inertia(&s, st, i);
     let invariants = |st: &State| {
         let (mut p, mut l, mut e) = (Vector3::zeros(), Vector3::zeros(), 0.0);
         for (i, b) in s.bodies.iter().enumerate() {
