@@ -79,6 +79,21 @@ pub fn write(
     let dir = out.join("checkpoints");
     create_dir_all(&dir)?;
     let path = dir.join(file_name(time));
+    let bytes = to_bytes(time, world, recorder, controller)
+        .map_err(|e| Error::io(&path, std::io::Error::other(e)))?;
+    write_atomic(&path, &bytes)?;
+    Ok(path)
+}
+
+/// The bytes of the checkpoint at `time`, as [`write`] stores them (magic, version,
+/// BLAKE3 of the state, the state): what an embedding keeps in memory (the Python
+/// package pickles a co-simulation as these).
+pub fn to_bytes(
+    time: SimTime,
+    world: &CoSim,
+    recorder: &Recorder,
+    controller: Option<&Controller>,
+) -> std::result::Result<Vec<u8>, postcard::Error> {
     let mut bytes = MAGIC.to_vec();
     bytes.extend_from_slice(&VERSION.to_le_bytes());
     let body = postcard::to_stdvec(&CheckpointRef {
@@ -87,12 +102,10 @@ pub fn write(
         world,
         recorder,
         controller,
-    })
-    .map_err(|e| Error::io(&path, std::io::Error::other(e)))?;
+    })?;
     bytes.extend_from_slice(blake3::hash(&body).as_bytes());
     bytes.extend_from_slice(&body);
-    write_atomic(&path, &bytes)?;
-    Ok(path)
+    Ok(bytes)
 }
 
 /// The bytes of a checkpoint file: the first 20 (magic and version) alone unless they
@@ -125,7 +138,13 @@ fn read_bytes(path: &Path) -> Result<Vec<u8>> {
 /// the rest is read up to [`crate::input::DEFAULT_MAX_MEMORY_BYTES`].
 pub fn read(path: &Path) -> Result<Checkpoint> {
     let bytes = read_bytes(path)?;
-    let label = path.display().to_string();
+    from_bytes(&bytes, &path.display().to_string())
+}
+
+/// The checkpoint held in `bytes` ([`to_bytes`]'s), checked as [`read`] checks a file;
+/// errors name `label`.
+pub fn from_bytes(bytes: &[u8], label: &str) -> Result<Checkpoint> {
+    let label = label.to_string();
     if bytes.len() < MAGIC.len() + 4 || &bytes[..MAGIC.len()] != MAGIC {
         return Err(Error::invalid(
             label,

@@ -584,14 +584,8 @@ fn report(name: &str, outcome: &crate::run::Outcome, out: &std::path::Path) {
         outcome.digest
     );
     say!("wrote {}", out.display());
-    if let Some(w) = outcome.boundary_layer.as_ref().and_then(|l| l.warning()) {
+    for w in outcome.warnings() {
         eprintln!("warning: {w}");
-    }
-    if let Some(w) = outcome.joint_work.as_ref().and_then(|j| j.warning()) {
-        eprintln!("warning: {w}");
-    }
-    for u in &outcome.unserved {
-        eprintln!("warning: {}", u.warning());
     }
 }
 

@@ -27,3 +27,16 @@ pub fn install() {
 pub fn requested() -> bool {
     REQUESTED.load(Ordering::Relaxed)
 }
+
+/// Asks every run, controlled run and sweep of the process to stop as Ctrl-C does: an
+/// embedding that owns the signals (the Python package, whose interpreter takes SIGINT)
+/// calls it when its own handler fires.
+pub fn request() {
+    REQUESTED.store(true, Ordering::SeqCst);
+}
+
+/// Withdraws a stop asked by [`request`] once the work it stopped has returned, so the
+/// next call of the embedding runs.
+pub fn clear() {
+    REQUESTED.store(false, Ordering::SeqCst);
+}

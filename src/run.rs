@@ -69,6 +69,21 @@ pub struct Outcome {
     pub unserved: Vec<unserved::Unserved>,
 }
 
+impl Outcome {
+    /// What the command line prints as `warning:` lines after a run: the law left the
+    /// SMC boundary layer, did work on the joints, or a channel's delays were not
+    /// realized.
+    pub fn warnings(&self) -> Vec<String> {
+        let layer = self.boundary_layer.as_ref().and_then(|l| l.warning());
+        let joints = self.joint_work.as_ref().and_then(|j| j.warning());
+        layer
+            .into_iter()
+            .chain(joints)
+            .chain(self.unserved.iter().map(|u| u.warning()))
+            .collect()
+    }
+}
+
 /// Options of a run beyond its scenario.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct RunOptions {
@@ -303,8 +318,17 @@ fn finish(
     result.map(|()| outcome)
 }
 
+/// The steps of one slice of an uncontrolled run: 1024, fewer on a large model (about
+/// 2^18 body-steps a slice, at least 16 steps), so that a slice takes a fraction of a
+/// second and Ctrl-C, checked between slices, is answered within it. Slicing changes
+/// nothing a run writes: events are processed in the same order.
+pub fn slice_steps(scenario: &Scenario) -> u64 {
+    let bodies = scenario.bodies.len().max(1) as u64;
+    ((1 << 18) / bodies).clamp(16, 1024)
+}
+
 /// Drives the world to its end — window by window under a controller, else in slices
-/// of 1024 steps with progress on a terminal — writing checkpoints on the way.
+/// of [`slice_steps`] with progress on a terminal — writing checkpoints on the way.
 fn drive(
     out: &Path,
     world: &mut CoSim,
@@ -317,7 +341,7 @@ fn drive(
     let mut progress = crate::progress::Progress::new(steps);
     // Saturating: a dt near the end of simulated time (about 1.8e10 s) times 1024 wrapped
     // to a slice that never reached the end.
-    let slice = SimTime(dt.0.saturating_mul(1024));
+    let slice = SimTime(dt.0.saturating_mul(slice_steps(s)));
     let mut t = match &controller {
         Some(c) => c.next_window(),
         None => world.now(),

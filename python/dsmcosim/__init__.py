@@ -11,7 +11,13 @@ from Python gives the same digest as the same run from the command line. See
 docs/python.md.
 """
 
-from ._native import DsmcosimError, __version__
-from ._api import CoSim, Run, run, sweep, validate
+from ._native import __version__
+from ._errors import (DivergedError, DsmcosimError, DsmcosimWarning, FileError,
+                      InvalidScenarioError, NotFoundError, OutOfMemoryError,
+                      PermissionDeniedError, SimulationError, StoppedError)
+from ._api import CoSim, Run, read_table, run, sweep, validate
 
-__all__ = ["CoSim", "DsmcosimError", "Run", "run", "sweep", "validate", "__version__"]
+__all__ = ["CoSim", "DivergedError", "DsmcosimError", "DsmcosimWarning", "FileError",
+           "InvalidScenarioError", "NotFoundError", "OutOfMemoryError",
+           "PermissionDeniedError", "Run", "SimulationError", "StoppedError",
+           "read_table", "run", "sweep", "validate", "__version__"]

@@ -1,15 +1,21 @@
 """The package's functions over the native module (`dsmcosim._native`)."""
 
+import contextlib
 import json
 import os
+import re
 import shutil
 import tempfile
+import warnings
+import weakref
 from pathlib import Path
-from typing import Any, Callable, Dict, List, Mapping, Optional, Tuple, Union
+from typing import (Any, Callable, Dict, Iterator, List, Mapping, Optional, Sequence,
+                    Tuple, Union)
 
 import pandas as pd
 
 from . import _native
+from ._errors import DsmcosimError, DsmcosimWarning
 
 Scenario = Union[str, "os.PathLike[str]", Mapping[str, Any]]
 
@@ -23,15 +29,44 @@ def _pointer(name: str) -> str:
     return "/" + "/".join(name.split("__"))
 
 
-def _sets(overrides: Mapping[str, Any], set: Optional[Mapping[str, Any]]) -> List[str]:
+def _sets(overrides: Mapping[str, Any],
+          set: Optional[Mapping[str, Any]]) -> Tuple[List[str], List[Tuple[str, str]]]:
     """`--set POINTER=VALUE` strings, keyword overrides first, then `set`'s pointers, in
-    the order given (a later one wins, as on the command line)."""
-    pairs = [(_pointer(k), v) for k, v in overrides.items()]
-    pairs += list((set or {}).items())
-    for pointer, _ in pairs:
+    the order given (a later one wins, as on the command line); and for each, how the
+    caller spelled it in Python (for messages)."""
+    pairs = [(_pointer(k), v, f"{k}={v!r}") for k, v in overrides.items()]
+    pairs += [(p, v, f"set={{{p!r}: {v!r}}}") for p, v in (set or {}).items()]
+    for pointer, _, _ in pairs:
         if not pointer.startswith("/"):
             raise ValueError(f"an override's JSON pointer starts with '/': {pointer!r}")
-    return [f"{p}={json.dumps(v)}" for p, v in pairs]
+    strings = [f"{p}={json.dumps(v)}" for p, v, _ in pairs]
+    return strings, [(text, spelled) for text, (_, _, spelled) in zip(strings, pairs)]
+
+
+# The command line's options in messages, as the package's arguments.
+_FLAGS = [(re.compile(r"--resume\b"), "resume=True"), (re.compile(r"--force\b"), "force=True")]
+
+
+def _in_python_words(text: str, spellings: Sequence[Tuple[str, str]]) -> str:
+    """A message of the crate with the command line's words (`--set /a/b=1`,
+    `--force`, `--resume`) replaced by the arguments the Python caller used."""
+    for cli, spelled in spellings:
+        text = text.replace(f"--set {cli}", spelled)
+    for flag, argument in _FLAGS:
+        text = flag.sub(argument, text)
+    return text
+
+
+@contextlib.contextmanager
+def _spoken(spellings: Sequence[Tuple[str, str]] = ()) -> Iterator[None]:
+    """Re-raises a `DsmcosimError` with its message in Python's words."""
+    try:
+        yield
+    except DsmcosimError as e:
+        e.args = tuple(_in_python_words(a, spellings) if isinstance(a, str) else a
+                       for a in e.args)
+        e.message = _in_python_words(e.message, spellings)
+        raise
 
 
 def _source(scenario: Scenario, base_dir: Optional[Union[str, "os.PathLike[str]"]]):
@@ -92,35 +127,100 @@ def _reporter(progress: Progress) -> Tuple[Optional[Callable[[int, int, str], An
                     f"progress(position, total, unit), not {type(progress).__name__}")
 
 
-def read_table(path: Union[str, "os.PathLike[str]"]) -> pd.DataFrame:
-    """One of a run's CSV files as a DataFrame: numbers as float64 or int64 columns
-    (an empty cell, a value the run did not produce, is NaN), text as object."""
-    return pd.read_csv(path, keep_default_na=False, na_values=[""])
+# Columns whose values are whole numbers by nature (counts, indices, ids, seeds), as
+# nullable integers (an empty cell is <NA>); every other numeric column is float64 and
+# every text column text, whatever values a given run happens to hold.
+_INTEGER = re.compile(r"^(index|cycle|slot|sender|bytes|lost|measurements|lost_frames|"
+                      r"diverged_node|paired_n_.*|paired_wins_.*|paired_losses_.*)$")
+_UNSIGNED = re.compile(r"^seed$")
+_TEXT = re.compile(r"^(point|status|diverged_where|digest|kind|channel|info|"
+                   r"paired_verdict_.*)$")
+
+
+def _dtype(column: str, sweep_axes: Mapping[str, str]) -> Optional[str]:
+    if column in sweep_axes:
+        return sweep_axes[column]
+    if _UNSIGNED.match(column):
+        return "UInt64"
+    if _INTEGER.match(column):
+        return "Int64"
+    if _TEXT.match(column):
+        return "object"
+    return "float64"
+
+
+def read_table(path: Union[str, "os.PathLike[str]"],
+               columns: Optional[Sequence[str]] = None,
+               sweep_axes: Optional[Mapping[str, str]] = None) -> pd.DataFrame:
+    """One of a run's (or a sweep's) CSV files as a DataFrame, `columns` only if given.
+
+    Every float is the file's value to the bit (pandas' round-trip parser); each column
+    has one type whatever its values: float64 for quantities (times included), nullable
+    Int64 for counts and ids (UInt64 for seeds), object for text; an empty cell, a value
+    the run did not produce, is NaN (or <NA>). `sweep_axes` gives a sweep's axis
+    columns their types (from the sweep's values)."""
+    header = pd.read_csv(path, nrows=0).columns
+    wanted = list(header) if columns is None else list(columns)
+    missing = [c for c in wanted if c not in header]
+    if missing:
+        raise KeyError(f"{os.fspath(path)} has no column {missing[0]!r} "
+                       f"(it has {', '.join(header[:8])}{', …' if len(header) > 8 else ''})")
+    dtypes = {c: _dtype(c, sweep_axes or {}) for c in wanted}
+    return pd.read_csv(path, usecols=wanted, dtype=dtypes, keep_default_na=False,
+                       na_values=[""], float_precision="round_trip")[wanted]
 
 
 class Run:
-    """A finished run: its `summary` (summary.json as a dict), its `digest`, and its
-    tables `trace`, `epochs` and `network` (None where the run wrote none) as
-    DataFrames. `directory` is where its files are, or None for a run made with
-    `out=None` (its files were read, then removed)."""
+    """A run: its `summary` (summary.json as a dict), its `digest`, its `status`
+    ("ok", or "interrupted" for a run its progress callable stopped), its `warnings`,
+    and its tables `trace`, `epochs` and `network` (None where the run wrote none) as
+    DataFrames, each read from its file on first access (`table(name, columns)` reads
+    only some columns). `directory` is where its files are; a run made with `out=None`
+    keeps them in a temporary directory removed when the `Run` is."""
 
-    def __init__(self, directory: Path, keep: bool):
+    def __init__(self, directory: Path, keep: bool, warnings: Sequence[str] = ()):
         with open(directory / "summary.json") as f:
             self.summary: Dict[str, Any] = json.load(f)
         self.digest: str = self.summary["digest"]
-        tables = {
-            attr: read_table(directory / name) if (directory / name).is_file() else None
-            for attr, name in _TABLES.items()
-        }
-        self.trace: Optional[pd.DataFrame] = tables["trace"]
-        self.epochs: Optional[pd.DataFrame] = tables["epochs"]
-        self.network: Optional[pd.DataFrame] = tables["network"]
-        self.directory: Optional[Path] = directory if keep else None
+        self.status: str = self.summary.get("status", "ok")
+        self.warnings: List[str] = list(warnings)
+        self.directory: Path = directory
+        self._tables: Dict[str, Optional[pd.DataFrame]] = {}
+        if not keep:
+            self._cleanup = weakref.finalize(self, shutil.rmtree, os.fspath(directory), True)
+
+    def table(self, name: str, columns: Optional[Sequence[str]] = None) -> Optional[pd.DataFrame]:
+        """Table `name` ("trace", "epochs" or "network") read from its file, only
+        `columns` if given (a large trace read in part); None if the run wrote none."""
+        if name not in _TABLES:
+            raise ValueError(f"a run's tables are {', '.join(_TABLES)}, not {name!r}")
+        path = self.directory / _TABLES[name]
+        return read_table(path, columns) if path.is_file() else None
+
+    def _cached(self, name: str) -> Optional[pd.DataFrame]:
+        if name not in self._tables:
+            self._tables[name] = self.table(name)
+        return self._tables[name]
+
+    @property
+    def trace(self) -> Optional[pd.DataFrame]:
+        """trace.csv: one row per recorded step."""
+        return self._cached("trace")
+
+    @property
+    def epochs(self) -> Optional[pd.DataFrame]:
+        """epochs.csv: one row per measurement window."""
+        return self._cached("epochs")
+
+    @property
+    def network(self) -> Optional[pd.DataFrame]:
+        """network.csv of a TDMA run: one row per frame."""
+        return self._cached("network")
 
     def __repr__(self) -> str:
-        where = f", directory={str(self.directory)!r}" if self.directory else ""
         return (f"Run(scenario={self.summary.get('scenario')!r}, "
-                f"status={self.summary.get('status')!r}, digest={self.digest[:16]!r}…{where})")
+                f"status={self.status!r}, digest={self.digest[:16]!r}…, "
+                f"directory={str(self.directory)!r})")
 
 
 def run(scenario: Scenario, out: Optional[Union[str, "os.PathLike[str]"]] = None, *,
@@ -140,23 +240,36 @@ def run(scenario: Scenario, out: Optional[Union[str, "os.PathLike[str]"]] = None
 
     `progress=True` shows a tqdm bar (a widget in a notebook) over the steps, or the
     windows under a controller; a callable `progress(position, total, unit)` is called
-    instead (every 1024 steps, every window).
+    instead (every slice of steps: 1024, fewer on a large model; every window). A callable that returns False stops the
+    run there: its outputs are an interrupted run's and the `Run` says
+    `status == "interrupted"`. Ctrl-C (a notebook's "Interrupt kernel") stops the run
+    within a slice of steps and raises KeyboardInterrupt, the outputs up to there
+    written and marked interrupted, as on the command line.
 
-    Raises `DsmcosimError` for bad input (naming the field) and for a run that diverged
-    (its outputs up to the divergence are in `out`). The GIL is released while it runs.
+    Raises `InvalidScenarioError` (a ValueError) for bad input naming the field,
+    `NotFoundError` (a FileNotFoundError) for a missing file, and `DivergedError` for a
+    run that diverged (with `time`, `node` and `link`; its outputs up to the divergence
+    are in `out`). What the command line prints as a warning is issued as a
+    `DsmcosimWarning`. The GIL is released while it runs.
     """
-    sets = _sets(overrides, set)
+    sets, spellings = _sets(overrides, set)
     source = _source(scenario, base_dir)
     report, close = _reporter(progress)
     keep = out is not None
     directory = Path(out) if keep else Path(tempfile.mkdtemp(prefix="dsmcosim-run-"))
+    done = False
     try:
-        _native.run(source, os.fspath(directory), sets, force, report)
-        return Run(directory, keep)
+        with _spoken(spellings):
+            outcome = _native.run(source, os.fspath(directory), sets, force, report)
+        ran = Run(directory, keep, outcome["warnings"])
+        done = True
     finally:
         close()
-        if not keep:
+        if not keep and not done:
             shutil.rmtree(directory, ignore_errors=True)
+    for line in ran.warnings:
+        warnings.warn(line, DsmcosimWarning, stacklevel=2)
+    return ran
 
 
 def validate(scenario: Scenario, *, set: Optional[Mapping[str, Any]] = None,
@@ -165,9 +278,34 @@ def validate(scenario: Scenario, *, set: Optional[Mapping[str, Any]] = None,
     """Checks `scenario` as a run would before it starts and returns its plan as a
     dict (what `dsmcosim validate --json` writes: nodes, channels with their achieved
     delays, the network, the coupling, the size of the run). Overrides as for `run`.
-    Raises `DsmcosimError` naming the field of bad input."""
-    sets = _sets(overrides, set)
-    return json.loads(_native.validate(_source(scenario, base_dir), sets))
+    Raises `InvalidScenarioError` naming the field of bad input."""
+    sets, spellings = _sets(overrides, set)
+    with _spoken(spellings):
+        return json.loads(_native.validate(_source(scenario, base_dir), sets))
+
+
+def _axis_types(out: Path) -> Dict[str, str]:
+    """The dtype of each axis column of the sweep in `out`, from its values: Int64
+    when every value is an integer, float64 when every one is a number, else text."""
+    try:
+        with open(out / "sweep.json") as f:
+            axes = json.load(f).get("axes", [])
+    except (OSError, ValueError):
+        return {}
+    types = {}
+    for axis in axes:
+        values = axis.get("values") if isinstance(axis, dict) else None
+        if not isinstance(axis, dict) or "name" not in axis:
+            continue
+        if values is None:
+            types[axis["name"]] = "float64"
+        elif all(isinstance(v, int) and not isinstance(v, bool) for v in values):
+            types[axis["name"]] = "Int64"
+        elif all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values):
+            types[axis["name"]] = "float64"
+        else:
+            types[axis["name"]] = "object"
+    return types
 
 
 def sweep(sweep_file: Union[str, "os.PathLike[str]", Mapping[str, Any]],
@@ -183,8 +321,10 @@ def sweep(sweep_file: Union[str, "os.PathLike[str]", Mapping[str, Any]],
     point keeps of its run (`"summary"`, `"trace"` or `"all"`); `resume` continues a
     sweep in `out`. Overrides change the base scenario, as `--set` does.
     `progress=True` shows a tqdm bar over the points (or pass a callable
-    `progress(position, total, unit)`)."""
-    sets = _sets(overrides, set)
+    `progress(position, total, unit)`). Ctrl-C starts no further point, stops the
+    running ones and raises KeyboardInterrupt; a callable returning False does the same
+    and raises `StoppedError`; `resume=True` runs the rest."""
+    sets, spellings = _sets(overrides, set)
     report, close = _reporter(progress)
     scratch = None
     try:
@@ -207,13 +347,14 @@ def sweep(sweep_file: Union[str, "os.PathLike[str]", Mapping[str, Any]],
             path = os.fspath(sweep_file)
         else:
             raise TypeError(f"a sweep is a path or a dict, not {type(sweep_file).__name__}")
-        _native.sweep(path=path, out=os.fspath(out), sets=sets, keep=keep, resume=resume,
-                      progress=report)
+        with _spoken(spellings):
+            _native.sweep(path=path, out=os.fspath(out), sets=sets, keep=keep,
+                          resume=resume, progress=report)
     finally:
         close()
         if scratch is not None:
             shutil.rmtree(scratch, ignore_errors=True)
-    return read_table(Path(out) / "sweep.csv")
+    return read_table(Path(out) / "sweep.csv", sweep_axes=_axis_types(Path(out)))
 
 
 class CoSim:
@@ -242,7 +383,9 @@ class CoSim:
 
     def __init__(self, scenario: Scenario, *, set: Optional[Mapping[str, Any]] = None,
                  base_dir: Optional[Union[str, "os.PathLike[str]"]] = None, **overrides: Any):
-        self._sim = _native.CoSim(_source(scenario, base_dir), _sets(overrides, set))
+        sets, spellings = _sets(overrides, set)
+        with _spoken(spellings):
+            self._sim = _native.CoSim(_source(scenario, base_dir), sets)
 
     @classmethod
     def _of(cls, sim) -> "CoSim":
@@ -257,8 +400,14 @@ class CoSim:
 
     @property
     def now(self) -> float:
-        """Simulated time reached [s]."""
+        """Simulated time reached [s]: the state is at `now`, on the step grid
+        (`advance(t)` leaves `now == t` for a `t` on the grid, else `t` rounded up)."""
         return self._sim.now
+
+    @property
+    def dt(self) -> float:
+        """The step [s]: the grid `now` moves on."""
+        return self._sim.dt
 
     @property
     def duration(self) -> float:
@@ -291,12 +440,18 @@ class CoSim:
         return self._sim.digest
 
     def advance(self, t: float) -> None:
-        """Advances to `t` [s] (at most `duration`), closing the measurement window
-        that ends at `t`. Raises `DsmcosimError` on divergence."""
+        """Advances to `t` [s], rounded up to the step grid, so `now == t` after it (a
+        `t` past `duration` advances to the end, so `while not sim.finished:
+        sim.advance(sim.now + h)` ends), closing the measurement window that ends at
+        `t`. A `t` before `now` is refused (`InvalidScenarioError` naming `t`). Raises
+        `DivergedError` on divergence; Ctrl-C stops it within a slice of steps (`now`
+        says where; the co-simulation can go on from there) and raises
+        KeyboardInterrupt."""
         self._sim.advance(float(t))
 
-    def set_periods(self, periods: List[float]) -> List[float]:
-        """Sets every channel's period [s] from now on; returns the achieved ones."""
+    def set_periods(self, periods: Sequence[float]) -> List[float]:
+        """Sets every channel's period [s] from now on, each > 0 (one per channel, in
+        `channels` order); returns the achieved ones."""
         return self._sim.set_periods([float(p) for p in periods])
 
     def schedule(self) -> List[Dict[str, Any]]:
@@ -307,7 +462,7 @@ class CoSim:
         the same time). A resumed CoSim holds the decisions made since it resumed."""
         return [{"at": at, "tau": list(tau)} for at, tau in self._sim.schedule()]
 
-    def window_cost(self) -> Optional[tuple]:
+    def window_cost(self) -> Optional[Tuple[float, float]]:
         """`(t_end, cost)` of the last closed measurement window ([s], [m]), or None."""
         return self._sim.window_cost()
 
@@ -315,9 +470,28 @@ class CoSim:
         """An independent copy: what is done to it leaves this one as it was."""
         return CoSim._of(self._sim.fork())
 
+    def __copy__(self) -> "CoSim":
+        """`copy.copy` is a fork: a co-simulation has no shallow copy."""
+        return self.fork()
+
+    def __deepcopy__(self, memo: Dict[int, Any]) -> "CoSim":
+        return self.fork()
+
+    def __reduce__(self):
+        """A CoSim pickles as its checkpoint's bytes and its decisions, so it goes to
+        multiprocessing, joblib, Dask or Ray; the unpickled one continues to the same
+        digest."""
+        state, decisions = self._sim.state()
+        return (_unpickle, (bytes(state), decisions))
+
     def checkpoint(self, out: Union[str, "os.PathLike[str]"]) -> Path:
         """Writes a checkpoint into `out/checkpoints/` and returns its path."""
         return Path(self._sim.checkpoint(os.fspath(out)))
 
     def __repr__(self) -> str:
         return f"CoSim(now={self.now:g} s of {self.duration:g} s, periods={self.periods})"
+
+
+def _unpickle(state: bytes, decisions: List[Tuple[float, List[float]]]) -> CoSim:
+    """The CoSim a pickle holds (`CoSim.__reduce__`)."""
+    return CoSim._of(_native.CoSim.from_state(state, decisions))

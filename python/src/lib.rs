@@ -1,51 +1,172 @@
 //! `dsmcosim._native`: the few calls the Python package (`python/dsmcosim/`) makes into
 //! the crate. Each takes plain values (text, paths, override strings) and gives plain
 //! values back (JSON text, a digest), so the Python side builds its dicts and
-//! DataFrames itself; every call releases the GIL while the crate works. An error of the
-//! crate becomes `dsmcosim.DsmcosimError` with the field, the message and the exit code
-//! the command line would print and return.
+//! DataFrames itself. Every call that simulates runs the crate on a worker thread while
+//! the calling thread, the GIL released, looks for signals every 50 ms: Ctrl-C (or a
+//! notebook's "Interrupt kernel") stops the work at its next slice of steps, as the
+//! command line's Ctrl-C does, and raises `KeyboardInterrupt`. An error of the crate
+//! becomes the exception of `dsmcosim._errors` its kind calls for, with the field, the
+//! message and the exit code the command line would print and return.
 
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
+use std::time::Duration;
 
 use dsmcosim::control::Plant;
 use dsmcosim::cosim::CoSim;
+use dsmcosim::error::Place;
 use dsmcosim::kernel::SimTime;
 use dsmcosim::progress::{reporting_to, Listener};
 use dsmcosim::run::plan::RunPlan;
 use dsmcosim::run::RunOptions;
 use dsmcosim::scenario::{overrides, Scenario};
 use dsmcosim::trace::Recorder;
-use pyo3::exceptions::PyException;
+use pyo3::exceptions::PyKeyboardInterrupt;
 use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict};
 
-pyo3::create_exception!(
-    dsmcosim,
-    DsmcosimError,
-    PyException,
-    "An error of dsmcosim: `field` names what is wrong (a scenario field such as \
-     `channels[0].tau`, a file, or `--set ...`), `message` says what, and `exit_code` is \
-     what the command line would exit with (2 bad input, 3 a diverged or failed run, \
-     1 a file that could not be read or written)."
-);
+/// The exception class `name` of `dsmcosim._errors`.
+fn error_class<'py>(py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyAny>> {
+    py.import("dsmcosim._errors")?.getattr(name)
+}
 
-/// The crate's error as a Python exception with `field`, `message` and `exit_code`.
+/// The crate's error as the Python exception of its kind (`dsmcosim._errors`), with
+/// `field`, `message` and `exit_code`; a divergence also with `time`, `node`, `link`
+/// and `what`.
 fn py_error(py: Python<'_>, e: dsmcosim::Error) -> PyErr {
-    let (field, message) = match &e {
-        dsmcosim::Error::Invalid { path, message } => (path.clone(), message.clone()),
-        dsmcosim::Error::Parse {
+    match build_error(py, &e) {
+        Ok(err) => err,
+        Err(failed) => failed,
+    }
+}
+
+fn build_error(py: Python<'_>, e: &dsmcosim::Error) -> PyResult<PyErr> {
+    use dsmcosim::Error as E;
+    let text = e.to_string();
+    let (class, field, message) = match e {
+        E::Invalid { path, message } => ("InvalidScenarioError", path.clone(), message.clone()),
+        E::Parse {
             file, line, column, ..
-        } => (format!("{file}:{line}:{column}"), e.to_string()),
-        dsmcosim::Error::Io { path, .. } => (path.display().to_string(), e.to_string()),
-        _ => (String::new(), e.to_string()),
+        } => (
+            "InvalidScenarioError",
+            format!("{file}:{line}:{column}"),
+            text.clone(),
+        ),
+        E::Io { path, source } => {
+            let class = match source.kind() {
+                std::io::ErrorKind::NotFound => "NotFoundError",
+                std::io::ErrorKind::PermissionDenied => "PermissionDeniedError",
+                _ => "FileError",
+            };
+            (class, path.display().to_string(), text.clone())
+        }
+        E::Diverged(_) => ("DivergedError", String::new(), text.clone()),
+        E::OutOfMemory { .. } => ("OutOfMemoryError", String::new(), text.clone()),
+        E::Interrupted { .. } => {
+            return Ok(PyKeyboardInterrupt::new_err(text));
+        }
+        _ => ("SimulationError", String::new(), text.clone()),
     };
-    let err = DsmcosimError::new_err(e.to_string());
-    let value = err.value(py);
-    // Setting attributes on a fresh exception instance cannot fail short of memory.
-    let _ = value.setattr("field", field);
-    let _ = value.setattr("message", message);
-    let _ = value.setattr("exit_code", e.exit_code());
-    err
+    let value = error_class(py, class)?.call1((text.clone(),))?;
+    value.setattr("field", field)?;
+    value.setattr("message", message)?;
+    value.setattr("exit_code", e.exit_code())?;
+    match e {
+        E::Diverged(d) => {
+            value.setattr("time", d.time.as_secs_f64())?;
+            value.setattr("node", d.node)?;
+            let (link, row, body) = match d.place {
+                Place::Link(k) => (Some(format!("L{k}")), None, None),
+                Place::JointRow { joint, row } => (Some(format!("J{joint}")), Some(row), None),
+                Place::Body(id) => (None, None, Some(format!("B{id}"))),
+            };
+            value.setattr("link", link)?;
+            value.setattr("row", row)?;
+            value.setattr("body", body)?;
+            value.setattr("what", d.what.clone())?;
+        }
+        E::Io { source, .. } => {
+            value.setattr("filename", field_of(e))?;
+            value.setattr("errno", source.raw_os_error())?;
+            // Python's form, `[Errno 2] No such file or directory: 'path'`: the
+            // description without Rust's ` (os error 2)`.
+            let described = source.to_string();
+            let strerror = match described.rfind(" (os error ") {
+                Some(at) => described[..at].to_string(),
+                None => described,
+            };
+            value.setattr("strerror", strerror)?;
+        }
+        _ => {}
+    }
+    Ok(PyErr::from_value(value))
+}
+
+/// The path an I/O error names.
+fn field_of(e: &dsmcosim::Error) -> Option<String> {
+    match e {
+        dsmcosim::Error::Io { path, .. } => Some(path.display().to_string()),
+        _ => None,
+    }
+}
+
+/// Runs `work` on a worker thread while this thread, the GIL released, checks for
+/// Python signals every 50 ms. A signal whose handler raised (Ctrl-C's
+/// `KeyboardInterrupt`) asks the crate to stop ([`dsmcosim::interrupt::request`]) and
+/// comes back beside `work`'s result once the worker has stopped.
+///
+/// The stop is the process's, as the command line's Ctrl-C is: every dsmcosim call
+/// running in the process stops at its next slice. The flag is withdrawn once `work`
+/// has returned.
+fn interruptible<T: Send>(
+    py: Python<'_>,
+    work: impl FnOnce() -> T + Send,
+) -> PyResult<(T, Option<PyErr>)> {
+    let (tx, rx) = std::sync::mpsc::channel::<()>();
+    std::thread::scope(|scope| {
+        // The crate runs on the main thread under the command line: give the worker
+        // the main thread's usual 8 MiB of stack, not a spawned thread's 2 MiB.
+        let worker = std::thread::Builder::new()
+            .name("dsmcosim".into())
+            .stack_size(8 << 20)
+            .spawn_scoped(scope, move || {
+                let out = work();
+                let _ = tx.send(());
+                out
+            })
+            .map_err(|e| {
+                pyo3::exceptions::PyOSError::new_err(format!("cannot start a thread: {e}"))
+            })?;
+        let mut signal = None;
+        let mut rx = rx;
+        loop {
+            // The receiver goes into the GIL-free wait and back (it is Send, not Sync).
+            let (done, back) = py.detach(move || {
+                let waited = rx.recv_timeout(Duration::from_millis(50));
+                let timed_out = matches!(waited, Err(std::sync::mpsc::RecvTimeoutError::Timeout));
+                (!timed_out, rx)
+            });
+            rx = back;
+            if done {
+                break;
+            }
+            if signal.is_none() {
+                if let Err(e) = py.check_signals() {
+                    dsmcosim::interrupt::request();
+                    signal = Some(e);
+                }
+            }
+        }
+        let out = match worker.join() {
+            Ok(out) => out,
+            Err(panic) => std::panic::resume_unwind(panic),
+        };
+        if signal.is_some() {
+            dsmcosim::interrupt::clear();
+        }
+        Ok((out, signal))
+    })
 }
 
 /// Where a scenario comes from, as the package passes it (a dict with all three keys):
@@ -75,73 +196,110 @@ fn load(source: &Source, sets: &[String]) -> dsmcosim::Result<(Scenario, String)
 }
 
 /// A Python callable `progress(position, total, unit)` as the crate's progress
-/// listener, with the first exception it raised kept to be raised once the work is done
-/// (the crate's loop cannot stop on it; later calls are skipped).
+/// listener. Returning `False` asks the work to stop (a run ends as an interrupted run
+/// does, its outputs written); raising does too, and the exception is raised once the
+/// work has stopped (later calls are skipped).
 struct Reporter {
     listener: Option<Listener>,
     failed: Arc<Mutex<Option<PyErr>>>,
+    stopped: Arc<AtomicBool>,
 }
 
 impl Reporter {
     fn new(progress: Option<Py<PyAny>>) -> Reporter {
         let failed: Arc<Mutex<Option<PyErr>>> = Arc::default();
+        let stopped: Arc<AtomicBool> = Arc::default();
         let listener = progress.map(|callable| {
-            let failed = failed.clone();
+            let (failed, stopped) = (failed.clone(), stopped.clone());
             let listener: Listener = Arc::new(move |pos: u64, total: u64, unit: &str| {
                 let mut first = failed.lock().unwrap_or_else(|p| p.into_inner());
-                if first.is_some() {
+                if first.is_some() || stopped.load(Ordering::SeqCst) {
                     return;
                 }
-                Python::attach(|py| {
-                    if let Err(e) = callable.call1(py, (pos, total, unit)) {
+                Python::attach(|py| match callable.call1(py, (pos, total, unit)) {
+                    Ok(answer) => {
+                        let answer = answer.bind(py);
+                        let is_false = answer.is_instance_of::<pyo3::types::PyBool>()
+                            && !answer.is_truthy().unwrap_or(true);
+                        if is_false {
+                            stopped.store(true, Ordering::SeqCst);
+                            dsmcosim::interrupt::request();
+                        }
+                    }
+                    Err(e) => {
                         *first = Some(e);
+                        dsmcosim::interrupt::request();
                     }
                 });
             });
             listener
         });
-        Reporter { listener, failed }
+        Reporter {
+            listener,
+            failed,
+            stopped,
+        }
     }
 
-    /// `result`, or the callable's exception if it raised one.
-    fn finish<T>(self, py: Python<'_>, result: dsmcosim::Result<T>) -> PyResult<T> {
-        let value = result.map_err(|e| py_error(py, e))?;
+    /// `result` as Python sees it: the signal's exception (Ctrl-C) first, then the
+    /// callable's, then the crate's error; `Ok(None)` for work the callable stopped by
+    /// returning `False`.
+    fn finish<T>(
+        self,
+        py: Python<'_>,
+        result: dsmcosim::Result<T>,
+        signal: Option<PyErr>,
+    ) -> PyResult<Option<T>> {
         let raised = self.failed.lock().unwrap_or_else(|p| p.into_inner()).take();
-        match raised {
-            Some(e) => Err(e),
-            None => Ok(value),
+        let stopped = self.stopped.load(Ordering::SeqCst);
+        if stopped || raised.is_some() {
+            dsmcosim::interrupt::clear();
+        }
+        if let Some(e) = signal.or(raised) {
+            return Err(e);
+        }
+        match result {
+            Ok(value) => Ok(Some(value)),
+            Err(dsmcosim::Error::Interrupted { .. }) if stopped => Ok(None),
+            Err(e) => Err(py_error(py, e)),
         }
     }
 }
 
 /// Runs a scenario into `out` (as `dsmcosim run`, writing the same files, the scenario
-/// as run included) and returns the run's digest. A run that diverged raises, its
-/// outputs up to the divergence written. `progress(position, total, unit)` is called
-/// as the run goes (steps, or windows under a controller).
+/// as run included). Returns `{"warnings": [...], "stopped": bool}`: the lines the
+/// command line prints as `warning:`, and whether `progress` stopped the run by
+/// returning `False` (its outputs are then those of an interrupted run). A run that
+/// diverged raises, its outputs up to the divergence written; Ctrl-C stops it at its
+/// next slice of steps and raises `KeyboardInterrupt`, the outputs up to there written.
 #[pyfunction]
 #[pyo3(signature = (source, out, sets, force, progress=None))]
-fn run(
-    py: Python<'_>,
+fn run<'py>(
+    py: Python<'py>,
     source: Source,
     out: PathBuf,
     sets: Vec<String>,
     force: bool,
     progress: Option<Py<PyAny>>,
-) -> PyResult<String> {
+) -> PyResult<Bound<'py, PyDict>> {
     let reporter = Reporter::new(progress);
     let listener = reporter.listener.clone();
-    let result = py.detach(|| {
-        reporting_to(listener, || -> dsmcosim::Result<String> {
+    let (result, signal) = interruptible(py, || {
+        reporting_to(listener, || -> dsmcosim::Result<Vec<String>> {
             let (scenario, text) = load(&source, &sets)?;
             let options = RunOptions {
                 force,
                 ..RunOptions::default()
             };
             dsmcosim::run::run_keeping_scenario(&scenario, &text, &out, options)
-                .map(|outcome| outcome.digest)
+                .map(|outcome| outcome.warnings())
         })
-    });
-    reporter.finish(py, result)
+    })?;
+    let finished = reporter.finish(py, result, signal)?;
+    let outcome = PyDict::new(py);
+    outcome.set_item("stopped", finished.is_none())?;
+    outcome.set_item("warnings", finished.unwrap_or_default())?;
+    Ok(outcome)
 }
 
 /// The plan of a scenario (what `dsmcosim validate --json` writes), as JSON text,
@@ -158,7 +316,10 @@ fn validate(py: Python<'_>, source: Source, sets: Vec<String>) -> PyResult<Strin
 }
 
 /// Runs the sweep file at `path` into `out` (as `dsmcosim sweep`); its table is
-/// `out/sweep.csv`. `progress(position, total, "points")` is called as points finish.
+/// `out/sweep.csv`. `progress(position, total, "points")` is called as points finish;
+/// Ctrl-C, or `progress` returning `False`, starts no further point and stops the
+/// running ones (raising `KeyboardInterrupt`, or `StoppedError` counting the points
+/// finished; `resume=True` runs the rest).
 #[pyfunction]
 #[pyo3(signature = (path, out, sets, keep, resume, progress=None))]
 fn sweep(
@@ -192,12 +353,30 @@ fn sweep(
     };
     let reporter = Reporter::new(progress);
     let listener = reporter.listener.clone();
-    let result = py.detach(|| {
+    let stopped = reporter.stopped.clone();
+    let (result, signal) = interruptible(py, || {
         reporting_to(listener, || {
             dsmcosim::sweep::run(&path, &out, &options).map(|_| ())
         })
-    });
-    reporter.finish(py, result)
+    })?;
+    let result = match result {
+        // The sweep stopped by the callable: its count of finished points, as an error
+        // of its own (the table is written only by a sweep that ran every point).
+        Err(dsmcosim::Error::Checks { message, code: 130 }) if stopped.load(Ordering::SeqCst) => {
+            let err = error_class(py, "StoppedError")?.call1((message.clone(),))?;
+            err.setattr("field", "progress")?;
+            err.setattr("message", message)?;
+            err.setattr("exit_code", 130)?;
+            reporter.finish(py, Ok(()), signal)?;
+            return Err(PyErr::from_value(err));
+        }
+        Err(dsmcosim::Error::Checks { message, code: 130 }) => {
+            reporter.finish(py, Ok(()), signal)?;
+            return Err(PyKeyboardInterrupt::new_err(message));
+        }
+        other => other,
+    };
+    reporter.finish(py, result, signal).map(|_| ())
 }
 
 /// A co-simulation steered from Python window by window: the same world the command
@@ -300,10 +479,17 @@ impl PyCoSim {
         })
     }
 
-    /// Simulated time reached [s].
+    /// Simulated time reached [s]: the state is at `now` (on the step grid; `advance(t)`
+    /// leaves it at `t` rounded up to the grid).
     #[getter]
     fn now(&self) -> f64 {
-        self.world.now().as_secs_f64()
+        self.world.reached().as_secs_f64()
+    }
+
+    /// The step [s].
+    #[getter]
+    fn dt(&self) -> f64 {
+        self.world.scenario().dt.as_secs_f64()
     }
 
     /// The scenario's end [s].
@@ -352,30 +538,57 @@ impl PyCoSim {
         self.world.finished()
     }
 
-    /// Advances to `t` [s] (at most the scenario's end): every event before `t`, and
-    /// the measurement window ending at `t`; at the end, everything left (the last
-    /// step). Raises on divergence.
+    /// Advances to `t` [s], rounded up to the step grid (a `t` past the scenario's end
+    /// advances to the end): every event before it, and the measurement window ending
+    /// at it; at the end, everything left (the last step). A `t` before `now` is
+    /// refused. Raises on divergence; Ctrl-C stops it at the next slice of steps (`now`
+    /// says where) and raises `KeyboardInterrupt`.
     fn advance(&mut self, py: Python<'_>, t: f64) -> PyResult<()> {
         let (world, recorder) = (&mut self.world, &mut self.recorder);
-        let done = py.detach(|| -> dsmcosim::Result<()> {
-            let target = sim_time("t", t)?;
-            if target < world.now() || target > world.scenario().duration {
+        let target = (|| -> dsmcosim::Result<SimTime> {
+            let asked = sim_time("t", t)?;
+            let (dt, end, now) = (
+                world.scenario().dt.0,
+                world.scenario().duration,
+                world.reached(),
+            );
+            let on_grid = SimTime(asked.0.div_ceil(dt).saturating_mul(dt)).min(end);
+            if on_grid < now {
                 return Err(dsmcosim::Error::invalid(
                     "t",
                     format!(
-                        "must lie in [now, duration] = [{}, {}] s (got {t})",
-                        world.now().as_secs_f64(),
-                        world.scenario().duration.as_secs_f64()
+                        "must not lie before now = {} s (got {t} s): a co-simulation does \
+                         not go back (fork it to try something from here)",
+                        now.as_secs_f64()
                     ),
                 ));
             }
-            if target == world.scenario().duration {
-                // The end: the step at `duration` too, as a run to its end takes it.
-                world.run_to_end(recorder)
-            } else {
-                Plant::advance_to(world, target, recorder)
+            Ok(on_grid)
+        })()
+        .map_err(|e| py_error(py, e))?;
+        let (done, signal) = interruptible(py, move || -> dsmcosim::Result<()> {
+            // Slices as a run's: the world stops between two when asked (Ctrl-C).
+            // Slicing changes nothing: events are processed in the same order.
+            let steps = dsmcosim::run::slice_steps(world.scenario());
+            let slice = world.scenario().dt.0.saturating_mul(steps);
+            let end = world.scenario().duration;
+            loop {
+                let now = world.reached();
+                let next = SimTime(now.0.saturating_add(slice)).min(target);
+                Plant::advance_to(world, next, recorder)?;
+                if next == target || dsmcosim::interrupt::requested() {
+                    break;
+                }
             }
-        });
+            if target == end && !dsmcosim::interrupt::requested() {
+                // The end: the step at `duration` too, as a run to its end takes it.
+                world.run_to_end(recorder)?;
+            }
+            Ok(())
+        })?;
+        if let Some(signal) = signal {
+            return Err(signal);
+        }
         done.map_err(|e| py_error(py, e))
     }
 
@@ -396,13 +609,20 @@ impl PyCoSim {
                 .iter()
                 .enumerate()
                 .map(|(i, &p)| {
-                    sim_time(&format!("periods[{i}]"), p)?;
+                    let what = format!("periods[{i}]");
+                    if !(p.is_finite() && p > 0.0) {
+                        return Err(dsmcosim::Error::invalid(
+                            what,
+                            format!("must be a period > 0 s (got {})", dsmcosim::error::num(p)),
+                        ));
+                    }
+                    sim_time(&what, p)?;
                     Ok(dsmcosim::network::channel::achieved_period(p, dt))
                 })
                 .collect()
         })();
         let achieved = checked.map_err(|e| py_error(py, e))?;
-        let now = self.world.now();
+        let now = self.world.reached();
         let set = Plant::set_taus(&mut self.world, now, &periods, &achieved).map_err(|e| {
             py_error(
                 py,
@@ -466,16 +686,57 @@ impl PyCoSim {
     /// and returns its path (resume it with `CoSim.resume`).
     fn checkpoint(&self, py: Python<'_>, out: PathBuf) -> PyResult<PathBuf> {
         let written = py.detach(|| {
-            dsmcosim::checkpoint::write(&out, self.world.now(), &self.world, &self.recorder, None)
+            let now = self.world.reached();
+            dsmcosim::checkpoint::write(&out, now, &self.world, &self.recorder, None)
         });
         written.map_err(|e| py_error(py, e))
+    }
+
+    /// The co-simulation as bytes (a checkpoint's) and its decisions: what a pickle
+    /// holds.
+    #[allow(clippy::type_complexity)]
+    fn state<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyBytes>, Vec<(f64, Vec<f64>)>)> {
+        let bytes = py.detach(|| {
+            dsmcosim::checkpoint::to_bytes(self.world.reached(), &self.world, &self.recorder, None)
+                .map_err(|e| dsmcosim::Error::invalid("pickle", e.to_string()))
+        });
+        let bytes = bytes.map_err(|e| py_error(py, e))?;
+        let decisions = self
+            .decisions
+            .iter()
+            .map(|(at, tau)| (at.as_secs_f64(), tau.clone()))
+            .collect();
+        Ok((PyBytes::new(py, &bytes), decisions))
+    }
+
+    /// The co-simulation `state` gave.
+    #[staticmethod]
+    fn from_state(
+        py: Python<'_>,
+        bytes: Vec<u8>,
+        decisions: Vec<(f64, Vec<f64>)>,
+    ) -> PyResult<PyCoSim> {
+        let cp = py.detach(|| dsmcosim::checkpoint::from_bytes(&bytes, "pickle"));
+        let cp = cp.map_err(|e| py_error(py, e))?;
+        let decisions = decisions
+            .into_iter()
+            .map(|(at, tau)| Ok((sim_time("pickle", at)?, tau)))
+            .collect::<dsmcosim::Result<Vec<_>>>()
+            .map_err(|e| py_error(py, e))?;
+        Ok(PyCoSim {
+            world: cp.world,
+            recorder: cp.recorder,
+            decisions,
+        })
     }
 }
 
 /// The native module.
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    m.add("DsmcosimError", m.py().get_type::<DsmcosimError>())?;
+    // The package draws its own bars (tqdm, or the caller's callable): the crate's
+    // terminal bar would fight them for the line.
+    dsmcosim::progress::silence();
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(validate, m)?)?;

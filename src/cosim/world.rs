@@ -454,6 +454,22 @@ impl CoSim {
         self.kernel.now().max(last_step)
     }
 
+    /// The time the state has reached: the bodies integrated to it, every event before
+    /// it processed (and the measurement events at it, after [`advance_to`] it); the
+    /// scenario's end once [`finished`]. On the step grid; [`now`] is the last event's
+    /// time, one step earlier when that was a step.
+    ///
+    /// [`advance_to`]: Self::advance_to
+    /// [`finished`]: Self::finished
+    /// [`now`]: Self::now
+    pub fn reached(&self) -> SimTime {
+        let end = self.scenario.duration;
+        if self.finished() {
+            return end;
+        }
+        SimTime(self.steps_done.saturating_mul(self.scenario.dt.0)).min(end)
+    }
+
     /// Whether every event up to the end of the run has been processed.
     pub fn finished(&self) -> bool {
         self.steps_done > self.scenario.steps
