@@ -69,7 +69,8 @@ def _spoken(spellings: Sequence[Tuple[str, str]] = ()) -> Iterator[None]:
         raise
 
 
-def _source(scenario: Scenario, base_dir: Optional[Union[str, "os.PathLike[str]"]]):
+def _source(scenario: Scenario,
+            base_dir: Optional[Union[str, "os.PathLike[str]"]]) -> Dict[str, Optional[str]]:
     """The scenario as the native module takes it: a dict of `path`, `text` and
     `base_dir` (the one not used is None)."""
     if isinstance(scenario, Mapping):
@@ -88,17 +89,40 @@ def _source(scenario: Scenario, base_dir: Optional[Union[str, "os.PathLike[str]"
 Progress = Union[bool, Callable[[int, int, str], Any], None]
 
 
-class _Bars:
-    """tqdm bars (`tqdm.auto`: a widget in a notebook, text on a terminal) for the
-    crate's progress, one per unit it reports (`steps`, `windows`, `points`)."""
+def _in_notebook() -> bool:
+    """Whether the caller runs in a Jupyter kernel."""
+    try:
+        from IPython import get_ipython  # type: ignore[import-not-found]
+    except ImportError:
+        return False
+    shell = get_ipython()
+    return shell is not None and type(shell).__name__ == "ZMQInteractiveShell"
 
-    def __init__(self):
+
+def _tqdm() -> Any:
+    """tqdm's bar class: a widget in a notebook that has ipywidgets, text elsewhere (a
+    notebook without ipywidgets gets the text bar, not tqdm's warning)."""
+    try:
+        import tqdm  # type: ignore[import-untyped]
+    except ImportError as e:
+        raise ImportError("progress=True draws tqdm bars: `pip install tqdm` "
+                          "(or pass a callable progress(position, total, unit))") from e
+    if _in_notebook():
         try:
-            from tqdm.auto import tqdm
-        except ImportError as e:
-            raise ImportError("progress=True draws tqdm bars: `pip install tqdm` "
-                              "(or pass a callable progress(position, total, unit))") from e
-        self._tqdm = tqdm
+            import ipywidgets  # type: ignore[import-not-found]  # noqa: F401
+            from tqdm.notebook import tqdm as widget  # type: ignore[import-untyped]
+            return widget
+        except ImportError:
+            pass
+    return tqdm.tqdm
+
+
+class _Bars:
+    """tqdm bars for the crate's progress, one per unit it reports (`steps`, `windows`,
+    `points`): a widget in a notebook with ipywidgets, text on a terminal."""
+
+    def __init__(self) -> None:
+        self._tqdm = _tqdm()
         self._bars: Dict[str, Any] = {}
 
     def __call__(self, position: int, total: int, unit: str) -> None:
@@ -137,7 +161,7 @@ _TEXT = re.compile(r"^(point|status|diverged_where|digest|kind|channel|info|"
                    r"paired_verdict_.*)$")
 
 
-def _dtype(column: str, sweep_axes: Mapping[str, str]) -> Optional[str]:
+def _dtype(column: str, sweep_axes: Mapping[str, str]) -> str:
     if column in sweep_axes:
         return sweep_axes[column]
     if _UNSIGNED.match(column):
@@ -149,6 +173,12 @@ def _dtype(column: str, sweep_axes: Mapping[str, str]) -> Optional[str]:
     return "float64"
 
 
+# pandas' parser before 3.0 misreads some floats in the last digit unless asked for
+# the round-trip parser; from 3.0 its default is exact and the option is deprecated.
+_EXACT: Dict[str, Any] = ({"float_precision": "round_trip"}
+                          if int(pd.__version__.split(".")[0]) < 3 else {})
+
+
 def read_table(path: Union[str, "os.PathLike[str]"],
                columns: Optional[Sequence[str]] = None,
                sweep_axes: Optional[Mapping[str, str]] = None) -> pd.DataFrame:
@@ -157,7 +187,7 @@ def read_table(path: Union[str, "os.PathLike[str]"],
     Every float is the file's value to the bit (pandas' round-trip parser); each column
     has one type whatever its values: float64 for quantities (times included), nullable
     Int64 for counts and ids (UInt64 for seeds), object for text; an empty cell, a value
-    the run did not produce, is NaN (or <NA>). `sweep_axes` gives a sweep's axis
+    the run did not produce, is NaN (or <NA>), as is a NaN the run wrote. `sweep_axes` gives a sweep's axis
     columns their types (from the sweep's values)."""
     header = pd.read_csv(path, nrows=0).columns
     wanted = list(header) if columns is None else list(columns)
@@ -165,9 +195,10 @@ def read_table(path: Union[str, "os.PathLike[str]"],
     if missing:
         raise KeyError(f"{os.fspath(path)} has no column {missing[0]!r} "
                        f"(it has {', '.join(header[:8])}{', …' if len(header) > 8 else ''})")
-    dtypes = {c: _dtype(c, sweep_axes or {}) for c in wanted}
-    return pd.read_csv(path, usecols=wanted, dtype=dtypes, keep_default_na=False,
-                       na_values=[""], float_precision="round_trip")[wanted]
+    dtypes: Dict[str, str] = {c: _dtype(c, sweep_axes or {}) for c in wanted}
+    table: pd.DataFrame = pd.read_csv(path, usecols=wanted, dtype=dtypes, keep_default_na=False,
+                       na_values=["", "NaN"], **_EXACT)
+    return table[wanted]
 
 
 class Run:
@@ -217,6 +248,77 @@ class Run:
         """network.csv of a TDMA run: one row per frame."""
         return self._cached("network")
 
+    def plot(self) -> Any:
+        """The run's standard figures in one matplotlib Figure (matplotlib is an
+        optional dependency: `pip install matplotlib`), one panel per quantity the run
+        has: the largest constraint violation max |w| over the links [m] against time,
+        each measurement window's cost, each channel's achieved period [ms] per window,
+        and for a run without links its traced signals. Returns the Figure (save it
+        with `fig.savefig("run.svg")`; a notebook shows it)."""
+        try:
+            import matplotlib.pyplot as plt  # type: ignore[import-not-found, unused-ignore]
+        except ImportError as e:
+            raise ImportError("Run.plot draws with matplotlib: `pip install matplotlib`") from e
+        trace, epochs = self.trace, self.epochs
+        panels: List[Callable[[Any], None]] = []
+        links = [c for c in (trace.columns if trace is not None else []) if c.startswith("w_")]
+        if trace is not None and links:
+            def violation(ax: Any) -> None:
+                assert trace is not None
+                ax.plot(trace["t"], trace[links].abs().max(axis=1), color="C0",
+                        label=f"max over {len(links)} rows")
+                ax.set_ylabel("max |w| [m]")
+                ax.set_title("Constraint violation")
+                ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0))
+            panels.append(violation)
+        elif trace is not None and len(trace.columns) > 1:
+            # An FMU's outputs are `unit.variable`; the bodies' invariants (Px … KE)
+            # are left out when there are such signals.
+            named = [c for c in trace.columns if "." in c]
+            signals = (named or [c for c in trace.columns if c != "t"])[:8]
+
+            def traced(ax: Any) -> None:
+                assert trace is not None
+                for c in signals:
+                    ax.plot(trace["t"], trace[c], label=c)
+                ax.set_ylabel("value [signal's unit]")
+                ax.set_title("Traced signals")
+                ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0))
+            panels.append(traced)
+        if epochs is not None and "cost" in epochs.columns and len(epochs) > 0:
+            unit = "m" if links else "signal's unit"
+
+            def cost(ax: Any) -> None:
+                assert epochs is not None
+                ax.step(epochs["t_end"], epochs["cost"], where="pre", color="C1",
+                        label="window cost")
+                ax.set_ylabel(f"cost [{unit}]")
+                ax.set_title("Cost of each measurement window")
+                ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0))
+            panels.append(cost)
+            achieved = [c for c in epochs.columns
+                        if c.startswith("tau_") and c.endswith("_achieved")]
+            if achieved:
+                def periods(ax: Any) -> None:
+                    assert epochs is not None
+                    for c in achieved:
+                        ax.step(epochs["t_start"], 1000.0 * epochs[c], where="post",
+                                label=c[len("tau_"):-len("_achieved")])
+                    ax.set_ylabel("period [ms]")
+                    ax.set_title("Achieved period of each channel")
+                    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0))
+                panels.append(periods)
+        if not panels:
+            raise ValueError("this run has no trace and no windows to plot")
+        fig, axes = plt.subplots(len(panels), 1, sharex=True, squeeze=False,
+                                 figsize=(9.0, 2.6 * len(panels)), constrained_layout=True)
+        for draw, ax in zip(panels, axes[:, 0]):
+            draw(ax)
+            ax.grid(True, alpha=0.3)
+        axes[-1, 0].set_xlabel("simulated time [s]")
+        fig.suptitle(f"{self.summary.get('scenario', 'run')} ({self.status})")
+        return fig
+
     def __repr__(self) -> str:
         return (f"Run(scenario={self.summary.get('scenario')!r}, "
                 f"status={self.status!r}, digest={self.digest[:16]!r}…, "
@@ -256,7 +358,7 @@ def run(scenario: Scenario, out: Optional[Union[str, "os.PathLike[str]"]] = None
     source = _source(scenario, base_dir)
     report, close = _reporter(progress)
     keep = out is not None
-    directory = Path(out) if keep else Path(tempfile.mkdtemp(prefix="dsmcosim-run-"))
+    directory = Path(out) if out is not None else Path(tempfile.mkdtemp(prefix="dsmcosim-run-"))
     done = False
     try:
         with _spoken(spellings):
@@ -272,6 +374,21 @@ def run(scenario: Scenario, out: Optional[Union[str, "os.PathLike[str]"]] = None
     return ran
 
 
+def load(directory: Union[str, "os.PathLike[str]"]) -> Union[Run, pd.DataFrame]:
+    """A stored run or sweep folder as `run` or `sweep` gives it: a `Run` for a run's
+    folder (summary.json; `dsmcosim run --out`, a sweep point, `results/<name>`), the
+    table `sweep.csv` for a sweep's folder. Nothing is copied; the files stay."""
+    folder = Path(directory)
+    if (folder / "summary.json").is_file():
+        return Run(folder, keep=True)
+    if (folder / "sweep.csv").is_file():
+        return read_table(folder / "sweep.csv", sweep_axes=_axis_types(folder))
+    if not folder.is_dir():
+        raise FileNotFoundError(2, "No such directory", os.fspath(folder))
+    raise ValueError(f"{os.fspath(folder)} holds neither a run (summary.json) nor a "
+                     "finished sweep (sweep.csv)")
+
+
 def validate(scenario: Scenario, *, set: Optional[Mapping[str, Any]] = None,
              base_dir: Optional[Union[str, "os.PathLike[str]"]] = None,
              **overrides: Any) -> Dict[str, Any]:
@@ -281,7 +398,8 @@ def validate(scenario: Scenario, *, set: Optional[Mapping[str, Any]] = None,
     Raises `InvalidScenarioError` naming the field of bad input."""
     sets, spellings = _sets(overrides, set)
     with _spoken(spellings):
-        return json.loads(_native.validate(_source(scenario, base_dir), sets))
+        plan: Dict[str, Any] = json.loads(_native.validate(_source(scenario, base_dir), sets))
+    return plan
 
 
 def _axis_types(out: Path) -> Dict[str, str]:
@@ -388,7 +506,7 @@ class CoSim:
             self._sim = _native.CoSim(_source(scenario, base_dir), sets)
 
     @classmethod
-    def _of(cls, sim) -> "CoSim":
+    def _of(cls, sim: _native.CoSim) -> "CoSim":
         obj = cls.__new__(cls)
         obj._sim = sim
         return obj
@@ -477,7 +595,7 @@ class CoSim:
     def __deepcopy__(self, memo: Dict[int, Any]) -> "CoSim":
         return self.fork()
 
-    def __reduce__(self):
+    def __reduce__(self) -> Tuple[Any, Tuple[bytes, List[Tuple[float, List[float]]]]]:
         """A CoSim pickles as its checkpoint's bytes and its decisions, so it goes to
         multiprocessing, joblib, Dask or Ray; the unpickled one continues to the same
         digest."""

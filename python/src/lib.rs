@@ -553,7 +553,7 @@ impl PyCoSim {
                 world.reached(),
             );
             let on_grid = SimTime(asked.0.div_ceil(dt).saturating_mul(dt)).min(end);
-            if on_grid < now {
+            if asked < now {
                 return Err(dsmcosim::Error::invalid(
                     "t",
                     format!(
