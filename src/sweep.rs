@@ -79,7 +79,9 @@ pub mod table;
 
 use std::path::Path;
 
-pub use exec::{check, check_with, run, Checked, Keep, Options, Report, Shard};
+pub use exec::{
+    check, check_with, finish, pending, run, run_one, Checked, Keep, Options, Report, Shard,
+};
 pub use merge::{merge, MergeReport};
 pub use points::{derive_seed, splitmix64};
 

@@ -430,7 +430,8 @@ def sweep(sweep_file: Union[str, "os.PathLike[str]", Mapping[str, Any]],
           out: Union[str, "os.PathLike[str]"], *, keep: str = "all", resume: bool = False,
           set: Optional[Mapping[str, Any]] = None,
           base_dir: Optional[Union[str, "os.PathLike[str]"]] = None,
-          progress: Progress = None, **overrides: Any) -> pd.DataFrame:
+          progress: Progress = None, executor: Any = None,
+          **overrides: Any) -> pd.DataFrame:
     """Runs a sweep into `out` (as `dsmcosim sweep`) and returns its table,
     `out/sweep.csv`, as a DataFrame (one row per point).
 
@@ -441,7 +442,16 @@ def sweep(sweep_file: Union[str, "os.PathLike[str]", Mapping[str, Any]],
     `progress=True` shows a tqdm bar over the points (or pass a callable
     `progress(position, total, unit)`). Ctrl-C starts no further point, stops the
     running ones and raises KeyboardInterrupt; a callable returning False does the same
-    and raises `StoppedError`; `resume=True` runs the rest."""
+    and raises `StoppedError`; `resume=True` runs the rest.
+
+    `executor`: run the points on it instead of the crate's own thread pool — any
+    `concurrent.futures.Executor` (a `ProcessPoolExecutor`, Dask's
+    `client.get_executor()`), or a pool with `map` (`multiprocessing.Pool`, Ray's
+    `ray.util.multiprocessing.Pool`). Each point is `dsmcosim.point(spec)`, run where
+    the executor puts it; every worker must see `out` and the sweep's files at the same
+    paths (one machine, or a shared file system). The table is the one `dsmcosim sweep`
+    writes, byte for byte, and `resume=True` skips the points already done, by their
+    content hash."""
     sets, spellings = _sets(overrides, set)
     report, close = _reporter(progress)
     scratch = None
@@ -466,13 +476,70 @@ def sweep(sweep_file: Union[str, "os.PathLike[str]", Mapping[str, Any]],
         else:
             raise TypeError(f"a sweep is a path or a dict, not {type(sweep_file).__name__}")
         with _spoken(spellings):
-            _native.sweep(path=path, out=os.fspath(out), sets=sets, keep=keep,
-                          resume=resume, progress=report)
+            if executor is None:
+                _native.sweep(path=path, out=os.fspath(out), sets=sets, keep=keep,
+                              resume=resume, progress=report)
+            else:
+                _on_executor(executor, os.path.abspath(path), os.path.abspath(out), sets,
+                             keep, resume, report)
     finally:
         close()
         if scratch is not None:
             shutil.rmtree(scratch, ignore_errors=True)
     return read_table(Path(out) / "sweep.csv", sweep_axes=_axis_types(Path(out)))
+
+
+def point(spec: Mapping[str, Any]) -> Dict[str, Any]:
+    """Runs one point of a sweep, as `sweep(..., executor=...)` hands it out: `spec` is
+    `{"sweep": path, "out": directory, "sets": [...], "keep": ..., "key": ...}` (plain
+    values, so it pickles). The point's run goes into `out/points/<key>/` and its
+    record (done.json without the wall-clock time: `key`, `index`, `status`, `digest`,
+    `row`) is returned: the same record for the same spec, in any process. A point
+    whose `done.json` already records this point is not run again."""
+    out = Path(spec["out"])
+    _native.sweep_point(spec["sweep"], os.fspath(out), list(spec["sets"]), spec["keep"],
+                        spec["key"])
+    with open(out / "points" / spec["key"] / "done.json") as f:
+        record = json.load(f)
+    return {"key": spec["key"], "index": record["index"], "status": record["row"]["status"],
+            "digest": record["row"]["digest"], "row": record["row"]}
+
+
+def _on_executor(executor: Any, path: str, out: str, sets: List[str], keep: str,
+                 resume: bool, report: Optional[Callable[[int, int, str], Any]]) -> None:
+    """`sweep` with its points on `executor`: the points left to run (all, or without
+    those `resume` finds done), each `point(spec)` there, then the tables."""
+    keys = _native.sweep_pending(path, out, sets, keep, resume)
+    specs = [{"sweep": path, "out": out, "sets": sets, "keep": keep, "key": k} for k in keys]
+    if hasattr(executor, "submit"):
+        import concurrent.futures
+        futures = [executor.submit(point, spec) for spec in specs]
+        try:
+            for done, future in enumerate(concurrent.futures.as_completed(futures), 1):
+                future.result()
+                if report is not None and report(done, len(specs), "points") is False:
+                    raise _stopped(done, len(specs))
+        except BaseException:
+            for future in futures:
+                future.cancel()
+            raise
+    elif hasattr(executor, "imap_unordered") or hasattr(executor, "map"):
+        mapped = getattr(executor, "imap_unordered", None) or executor.map
+        for done, _ in enumerate(mapped(point, specs), 1):
+            if report is not None and report(done, len(specs), "points") is False:
+                raise _stopped(done, len(specs))
+    else:
+        raise TypeError("executor is a concurrent.futures.Executor (with submit) or a "
+                        f"pool with map, not {type(executor).__name__}")
+    _native.sweep_finish(path, out, sets, keep, len(specs))
+
+
+def _stopped(done: int, total: int) -> Exception:
+    from ._errors import StoppedError
+    e = StoppedError(f"stopped by the progress callable: {done} of the {total} points "
+                     "to run finished; resume=True runs the rest")
+    e.field, e.message = "progress", str(e)
+    return e
 
 
 class CoSim:

@@ -331,20 +331,7 @@ fn sweep(
     resume: bool,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<()> {
-    let keep = match keep {
-        "summary" => dsmcosim::sweep::Keep::Summary,
-        "trace" => dsmcosim::sweep::Keep::Trace,
-        "all" => dsmcosim::sweep::Keep::All,
-        other => {
-            return Err(py_error(
-                py,
-                dsmcosim::Error::invalid(
-                    "keep",
-                    format!("must be \"summary\", \"trace\" or \"all\" (got {other:?})"),
-                ),
-            ))
-        }
-    };
+    let keep = keep_of(keep).map_err(|e| py_error(py, e))?;
     let options = dsmcosim::sweep::Options {
         keep,
         resume,
@@ -377,6 +364,86 @@ fn sweep(
         other => other,
     };
     reporter.finish(py, result, signal).map(|_| ())
+}
+
+/// `keep` as the crate's [`dsmcosim::sweep::Keep`], or an error naming `keep`.
+fn keep_of(keep: &str) -> dsmcosim::Result<dsmcosim::sweep::Keep> {
+    match keep {
+        "summary" => Ok(dsmcosim::sweep::Keep::Summary),
+        "trace" => Ok(dsmcosim::sweep::Keep::Trace),
+        "all" => Ok(dsmcosim::sweep::Keep::All),
+        other => Err(dsmcosim::Error::invalid(
+            "keep",
+            format!("must be \"summary\", \"trace\" or \"all\" (got {other:?})"),
+        )),
+    }
+}
+
+/// A sweep on the caller's executor, first call: sets `out` up as `dsmcosim sweep`
+/// does and returns the keys of the points to run (without those a `resume` finds
+/// done), in index order.
+#[pyfunction]
+fn sweep_pending(
+    py: Python<'_>,
+    path: PathBuf,
+    out: PathBuf,
+    sets: Vec<String>,
+    keep: &str,
+    resume: bool,
+) -> PyResult<Vec<String>> {
+    let result = py.detach(|| {
+        let options = dsmcosim::sweep::Options {
+            keep: keep_of(keep)?,
+            resume,
+            shard: None,
+            sets,
+        };
+        dsmcosim::sweep::pending(&path, &out, &options)
+    });
+    result.map_err(|e| py_error(py, e))
+}
+
+/// Runs the point `key` of a sweep into `out/points/<key>/` (in any process that sees
+/// `out`), as `dsmcosim sweep` runs each point; Ctrl-C stops it as it stops a run.
+#[pyfunction]
+fn sweep_point(
+    py: Python<'_>,
+    path: PathBuf,
+    out: PathBuf,
+    sets: Vec<String>,
+    keep: &str,
+    key: String,
+) -> PyResult<()> {
+    let keep = keep_of(keep).map_err(|e| py_error(py, e))?;
+    let (result, signal) = interruptible(py, || {
+        dsmcosim::sweep::run_one(&path, &out, &sets, keep, &key)
+    })?;
+    if let Some(signal) = signal {
+        return Err(signal);
+    }
+    result.map_err(|e| py_error(py, e))
+}
+
+/// Writes a sweep's `sweep.csv`, `timing.csv` and figures once every point is done.
+#[pyfunction]
+fn sweep_finish(
+    py: Python<'_>,
+    path: PathBuf,
+    out: PathBuf,
+    sets: Vec<String>,
+    keep: &str,
+    ran: usize,
+) -> PyResult<()> {
+    let result = py.detach(|| {
+        let options = dsmcosim::sweep::Options {
+            keep: keep_of(keep)?,
+            resume: true,
+            shard: None,
+            sets,
+        };
+        dsmcosim::sweep::finish(&path, &out, &options, ran).map(|_| ())
+    });
+    result.map_err(|e| py_error(py, e))
 }
 
 /// A co-simulation steered from Python window by window: the same world the command
@@ -741,6 +808,9 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(validate, m)?)?;
     m.add_function(wrap_pyfunction!(sweep, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep_pending, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep_point, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep_finish, m)?)?;
     m.add_class::<PyCoSim>()?;
     Ok(())
 }

@@ -338,3 +338,77 @@ def test_a_run_plots_its_standard_figures(tmp_path):
     assert [t.get_text() for t in fig.axes[2].get_legend().get_texts()] == ["tau1", "tau2"]
     fig.savefig(tmp_path / "run.svg")
     assert (tmp_path / "run.svg").stat().st_size > 0
+
+
+BIN = Path(os.environ.get("DSMCOSIM_BIN", REPO / "target" / "release" / "dsmcosim"))
+
+
+def small_sweep(tmp_path):
+    """A 6-point sweep of the grid over two axes, and the command line's sweep.csv."""
+    sweep = tmp_path / "sweep.json"
+    sweep.write_text(json.dumps({
+        "name": "executor", "base": str(FIXED),
+        "overrides": {"/duration": 1.0, "/measurement/period": 0.25},
+        "axes": [{"name": "tau1", "pointer": "/channels/0/tau", "values": [0.002, 0.005, 0.01]},
+                 {"name": "draw", "pointer": "/seed", "values": [1, 2]}]}))
+    subprocess.run([str(BIN), "sweep", str(sweep), "--out", str(tmp_path / "cli"), "-q",
+                    "--keep", "summary"], check=True, capture_output=True)
+    return sweep, (tmp_path / "cli" / "sweep.csv").read_bytes()
+
+
+def test_a_sweep_on_a_process_pool_writes_the_command_lines_table(tmp_path):
+    from concurrent.futures import ProcessPoolExecutor
+    sweep, cli = small_sweep(tmp_path)
+    out = tmp_path / "pool"
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(2, mp_context=context) as pool:
+        table = dsmcosim.sweep(sweep, out, keep="summary", executor=pool)
+    assert (out / "sweep.csv").read_bytes() == cli
+    assert len(table) == 6 and table["draw"].dtype == "Int64"
+    # A rerun with resume runs no point again: each point's record is left as it was.
+    stamps = {p: p.stat().st_mtime_ns for p in out.glob("points/*/done.json")}
+    ran = []
+    with context.Pool(2) as pool:
+        dsmcosim.sweep(sweep, out, keep="summary", resume=True, executor=pool,
+                       progress=lambda pos, total, unit: ran.append(total))
+    assert ran == [] and stamps == {p: p.stat().st_mtime_ns for p in out.glob("points/*/done.json")}
+    assert (out / "sweep.csv").read_bytes() == cli
+
+
+def test_a_point_is_deterministic_and_runs_once(tmp_path):
+    sweep, _ = small_sweep(tmp_path)
+    out = tmp_path / "points"
+    keys = dsmcosim._native.sweep_pending(str(sweep), str(out), [], "summary", False)
+    spec = {"sweep": str(sweep), "out": str(out), "sets": [], "keep": "summary", "key": keys[0]}
+    first = dsmcosim.point(pickle.loads(pickle.dumps(spec)))
+    done = out / "points" / keys[0] / "done.json"
+    stamp = done.stat().st_mtime_ns
+    assert dsmcosim.point(spec) == first and done.stat().st_mtime_ns == stamp
+    other = tmp_path / "again"
+    dsmcosim._native.sweep_pending(str(sweep), str(other), [], "summary", False)
+    assert dsmcosim.point({**spec, "out": str(other)}) == first
+
+
+def test_a_sweep_on_a_local_dask_cluster_writes_the_command_lines_table(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    sweep, cli = small_sweep(tmp_path)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        dsmcosim.sweep(sweep, tmp_path / "dask", keep="summary",
+                       executor=client.get_executor())
+    assert (tmp_path / "dask" / "sweep.csv").read_bytes() == cli
+
+
+def test_a_sweep_on_a_ray_pool_writes_the_command_lines_table(tmp_path):
+    pytest.importorskip("ray")
+    from ray.util.multiprocessing import Pool
+    sweep, cli = small_sweep(tmp_path)
+    pool = Pool(processes=2, ray_address="local")
+    try:
+        dsmcosim.sweep(sweep, tmp_path / "ray", keep="summary", executor=pool)
+    finally:
+        pool.terminate()
+        import ray
+        ray.shutdown()
+    assert (tmp_path / "ray" / "sweep.csv").read_bytes() == cli

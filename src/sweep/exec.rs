@@ -346,58 +346,11 @@ fn keep_message(points: usize, each: u64, keep: Keep) -> Option<String> {
 /// has finished and written its `done.json`.
 pub fn run(sweep_path: &Path, out: &Path, options: &Options) -> Result<Report> {
     let loaded = load(sweep_path, &options.sets)?;
-    crate::output::refuse_foreign_outputs(out, "sweep.json", super::writes)?;
-    if !options.resume && out.join("sweep.json").exists() {
-        return Err(Error::invalid(
-            "--out",
-            format!(
-                "{} already holds a sweep; pass --resume to continue it (finished points are kept), or choose another directory",
-                out.display()
-            ),
-        ));
-    }
-    create_out_dir(out)?;
     // One sweep at a time in a directory: a second `sweep --resume` (a requeued cluster
     // task) is refused at once, naming the holder, instead of both rerunning the same
     // points and neither writing sweep.csv. Held until the sweep returns.
-    let _lock = crate::output::run_dir::lock(out, SWEEP_LOCK, "dsmcosim sweep")?;
-    // sweep.json first: it claims the directory, so a sweep stopped at any point after
-    // it resumes.
-    write_atomic(&out.join("sweep.json"), loaded.text.as_bytes())?;
-    create_dir_all(&out.join("points"))?;
-    let selected: Vec<&Point> = loaded
-        .points
-        .iter()
-        .filter(|p| options.shard.is_none_or(|s| s.contains(p.index)))
-        .collect();
-    let mut to_run = Vec::new();
-    for p in &selected {
-        let dir = point_dir(out, &p.key);
-        if options.resume {
-            if let Ok(Some(done)) = Record::read(&dir) {
-                if done.same_point(&expected(p, &loaded.base_digest)) {
-                    if done.index != p.index {
-                        // An axis gained a value: the point moved in the order, its run
-                        // did not change.
-                        Record {
-                            index: p.index,
-                            ..done
-                        }
-                        .write(&dir)?;
-                    }
-                    continue;
-                }
-            }
-        }
-        // A stale marker must not survive a rerun that fails half-way.
-        match std::fs::remove_file(dir.join(DONE)) {
-            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-                return Err(Error::io(dir.join(DONE), e))
-            }
-            _ => {}
-        }
-        to_run.push(*p);
-    }
+    let (selected, to_run, _lock) = prepare(&loaded, out, options)?;
+    let to_run: Vec<&Point> = to_run.iter().map(|&k| &loaded.points[k]).collect();
     if let Some(w) = keep_warning(&loaded, &to_run, options.keep)? {
         eprintln!("warning: {w}");
     }
@@ -439,10 +392,81 @@ pub fn run(sweep_path: &Path, out: &Path, options: &Options) -> Result<Report> {
         });
     }
     results.into_iter().collect::<Result<Vec<()>>>()?;
+    complete(out, &loaded, &selected, to_run.len())
+}
+
+/// Sets `out` up for the sweep as [`run`] does before its first point: refuses a
+/// directory it did not write (or, without `resume`, one that holds a sweep), writes
+/// `sweep.json`, and removes the stale `done.json` of every point to rerun. Returns the
+/// indices of the selected points and of those to run (without the ones `resume`
+/// finds finished), and the directory's sweep lock.
+fn prepare(
+    loaded: &Loaded,
+    out: &Path,
+    options: &Options,
+) -> Result<(Vec<usize>, Vec<usize>, std::fs::File)> {
+    crate::output::refuse_foreign_outputs(out, "sweep.json", super::writes)?;
+    if !options.resume && out.join("sweep.json").exists() {
+        return Err(Error::invalid(
+            "--out",
+            format!(
+                "{} already holds a sweep; pass --resume to continue it (finished points are kept), or choose another directory",
+                out.display()
+            ),
+        ));
+    }
+    create_out_dir(out)?;
+    let lock = crate::output::run_dir::lock(out, SWEEP_LOCK, "dsmcosim sweep")?;
+    // sweep.json first: it claims the directory, so a sweep stopped at any point after
+    // it resumes.
+    write_atomic(&out.join("sweep.json"), loaded.text.as_bytes())?;
+    create_dir_all(&out.join("points"))?;
+    let selected: Vec<usize> = (0..loaded.points.len())
+        .filter(|&k| {
+            options
+                .shard
+                .is_none_or(|s| s.contains(loaded.points[k].index))
+        })
+        .collect();
+    let mut to_run = Vec::new();
+    for &k in &selected {
+        let p = &loaded.points[k];
+        let dir = point_dir(out, &p.key);
+        if options.resume {
+            if let Ok(Some(done)) = Record::read(&dir) {
+                if done.same_point(&expected(p, &loaded.base_digest)) {
+                    if done.index != p.index {
+                        // An axis gained a value: the point moved in the order, its run
+                        // did not change.
+                        Record {
+                            index: p.index,
+                            ..done
+                        }
+                        .write(&dir)?;
+                    }
+                    continue;
+                }
+            }
+        }
+        // A stale marker must not survive a rerun that fails half-way.
+        match std::fs::remove_file(dir.join(DONE)) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(Error::io(dir.join(DONE), e))
+            }
+            _ => {}
+        }
+        to_run.push(k);
+    }
+    Ok((selected, to_run, lock))
+}
+
+/// Writes the sweep's tables and figures from the `done.json` of the `selected` points
+/// (every one must be done), as [`run`] ends; `ran` counts the points run now.
+fn complete(out: &Path, loaded: &Loaded, selected: &[usize], ran: usize) -> Result<Report> {
     let records = selected
         .iter()
-        .map(|p| {
-            let dir = point_dir(out, &p.key);
+        .map(|&k| {
+            let dir = point_dir(out, &loaded.points[k].key);
             Record::read(&dir)?.ok_or_else(|| {
                 Error::io(
                     dir.join(DONE),
@@ -456,10 +480,68 @@ pub fn run(sweep_path: &Path, out: &Path, options: &Options) -> Result<Report> {
         name: loaded.plan.name.clone(),
         points: loaded.points.len(),
         selected: selected.len(),
-        ran: to_run.len(),
-        skipped: selected.len() - to_run.len(),
+        ran,
+        skipped: selected.len() - ran,
         diverged: records.iter().filter(|r| r.row.status != "ok").count(),
     })
+}
+
+/// A sweep run by an embedding's own executor (the Python package's
+/// `sweep(..., executor=...)`), in three calls: [`pending`] sets `out` up as [`run`]
+/// does and names the points to run; [`run_one`] runs one of them, in any process that
+/// sees `out` (each point writes only its own `points/<key>/`); [`finish`] writes the
+/// tables once every point is done. The result is [`run`]'s, byte for byte: the same
+/// points, the same records, the same writer.
+///
+/// The keys of the points of the sweep at `sweep_path` left to run in `out`, in index
+/// order: all of them, or with `options.resume` those without a matching `done.json`.
+pub fn pending(sweep_path: &Path, out: &Path, options: &Options) -> Result<Vec<String>> {
+    let loaded = load(sweep_path, &options.sets)?;
+    let (_, to_run, _lock) = prepare(&loaded, out, options)?;
+    Ok(to_run
+        .into_iter()
+        .map(|k| loaded.points[k].key.clone())
+        .collect())
+}
+
+/// Runs the point `key` of the sweep at `sweep_path` (with the overrides `sets`) into
+/// `out/points/<key>/`, as [`run`] runs each point, unless its `done.json` already
+/// records this very point; see [`pending`].
+pub fn run_one(
+    sweep_path: &Path,
+    out: &Path,
+    sets: &[String],
+    keep: Keep,
+    key: &str,
+) -> Result<()> {
+    let loaded = load(sweep_path, sets)?;
+    let p = loaded
+        .points
+        .iter()
+        .find(|p| p.key == key)
+        .ok_or_else(|| Error::invalid("point", format!("the sweep has no point {key:?}")))?;
+    // Done already (a retried task, a rerun): its record stands, as under `--resume`.
+    if let Ok(Some(done)) = Record::read(&point_dir(out, key)) {
+        if done.same_point(&expected(p, &loaded.base_digest)) {
+            return Ok(());
+        }
+    }
+    run_point(out, &loaded, p, keep)
+}
+
+/// Writes `out`'s `sweep.csv`, `timing.csv` and figures once every point [`pending`]
+/// named is done; `ran` counts the points run since. See [`pending`].
+pub fn finish(sweep_path: &Path, out: &Path, options: &Options, ran: usize) -> Result<Report> {
+    let loaded = load(sweep_path, &options.sets)?;
+    let _lock = crate::output::run_dir::lock(out, SWEEP_LOCK, "dsmcosim sweep")?;
+    let selected: Vec<usize> = (0..loaded.points.len())
+        .filter(|&k| {
+            options
+                .shard
+                .is_none_or(|s| s.contains(loaded.points[k].index))
+        })
+        .collect();
+    complete(out, &loaded, &selected, ran)
 }
 
 /// The record point `p` will get, without its measurements (for matching).
