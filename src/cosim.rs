@@ -36,4 +36,4 @@ pub mod world;
 pub use event::Event;
 pub use tdma::TdmaLink;
 pub use unit::Unit;
-pub use world::{CoSim, EpochRecord, Observer, StepValues};
+pub use world::{CoSim, EpochRecord, Observation, Observer, StepValues};

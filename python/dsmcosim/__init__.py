@@ -15,9 +15,10 @@ from ._native import __version__
 from ._errors import (DivergedError, DsmcosimError, DsmcosimWarning, FileError,
                       InvalidScenarioError, NotFoundError, OutOfMemoryError,
                       PermissionDeniedError, SimulationError, StoppedError)
-from ._api import CoSim, Run, load, point, read_table, run, sweep, validate
+from ._api import (CoSim, Observation, Run, load, point, read_table, run, sweep,
+                   validate)
 
 __all__ = ["CoSim", "DivergedError", "DsmcosimError", "DsmcosimWarning", "FileError",
-           "InvalidScenarioError", "NotFoundError", "OutOfMemoryError",
+           "InvalidScenarioError", "NotFoundError", "Observation", "OutOfMemoryError",
            "PermissionDeniedError", "Run", "SimulationError", "StoppedError", "load", "point",
            "read_table", "run", "sweep", "validate", "__version__"]

@@ -651,6 +651,12 @@ class CoSim:
         """`(t_end, cost)` of the last closed measurement window ([s], [m]), or None."""
         return self._sim.window_cost()
 
+    def observe(self) -> "Observation":
+        """The state at `now` as the step there records it (what trace.csv would hold
+        at `now`), as arrays, without writing files: measured on a fork, so this
+        co-simulation and its digest are untouched. Once `finished`, the last step's."""
+        return Observation(self._sim.observe())
+
     def fork(self) -> "CoSim":
         """An independent copy: what is done to it leaves this one as it was."""
         return CoSim._of(self._sim.fork())
@@ -675,6 +681,35 @@ class CoSim:
 
     def __repr__(self) -> str:
         return f"CoSim(now={self.now:g} s of {self.duration:g} s, periods={self.periods})"
+
+
+class Observation:
+    """What a controller can read of a co-simulation at `time` [s] (`CoSim.observe`),
+    as numpy arrays in the scenario's order: `bodies` (ids), `positions` [m],
+    `velocities` [m/s], `angular_velocities` [rad/s] (n × 3, world frame),
+    `orientations` (n × 4 unit quaternions w, x, y, z, body to world; 0 × 4 for point
+    masses), `rows` (constraint rows' names, `L1` or `J2_0`, as trace.csv names them),
+    `w` [m] and `f` [N] per row, `max_w` [m], and `signals` (each traced FMU output by
+    its trace column name, `unit.variable`)."""
+
+    def __init__(self, seen: Mapping[str, Any]):
+        import numpy as np
+        self.time: float = seen["time"]
+        self.bodies = np.asarray(seen["bodies"], dtype=np.int64)
+        self.positions = np.asarray(seen["p"], dtype=np.float64).reshape(-1, 3)
+        self.velocities = np.asarray(seen["v"], dtype=np.float64).reshape(-1, 3)
+        self.angular_velocities = np.asarray(seen["omega"], dtype=np.float64).reshape(-1, 3)
+        self.orientations = np.asarray(seen["q"], dtype=np.float64).reshape(-1, 4)
+        self.rows: List[str] = list(seen["rows"])
+        self.w = np.asarray(seen["w"], dtype=np.float64)
+        self.f = np.asarray(seen["f"], dtype=np.float64)
+        self.max_w: float = seen["max_w"]
+        self.signals: Dict[str, float] = dict(seen["signals"])
+
+    def __repr__(self) -> str:
+        return (f"Observation(time={self.time:g} s, {len(self.bodies)} bodies, "
+                f"{len(self.rows)} rows, max_w={self.max_w:.3e} m, "
+                f"{len(self.signals)} signals)")
 
 
 def _unpickle(state: bytes, decisions: List[Tuple[float, List[float]]]) -> CoSim:

@@ -743,6 +743,59 @@ impl PyCoSim {
         Plant::last_window(&self.world).map(|(end, cost)| (end.as_secs_f64(), cost))
     }
 
+    /// The state at `now` as the step there records it, measured on a fork (this
+    /// co-simulation is untouched): a dict of `time` [s], `bodies` (ids), `p`, `v`,
+    /// `omega` ([x, y, z] per body), `q` ([w, x, y, z] per body; empty for point
+    /// masses), `rows` (names), `w` [m] and `f` [N] per row, `max_w` [m], and `signals`
+    /// (name → value of each traced FMU output).
+    fn observe<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let seen = py
+            .detach(|| self.world.observe())
+            .map_err(|e| py_error(py, e))?;
+        let scenario = self.world.scenario();
+        let joints = scenario.links.iter().any(|l| l.joint.is_some());
+        let rows: Vec<String> = (0..seen.w.len())
+            .map(|k| match scenario.links.get(k) {
+                Some(l) if joints => l.name(k),
+                _ => dsmcosim::scenario::model::row_name(k, None),
+            })
+            .collect();
+        let signal_names: Vec<String> = scenario
+            .fmus
+            .iter()
+            .flat_map(|f| {
+                f.outputs
+                    .iter()
+                    .filter(|v| v.traced)
+                    .map(move |v| format!("{}.{}", f.name, v.name))
+            })
+            .collect();
+        let xyz = |vs: &[nalgebra::Vector3<f64>]| -> Vec<[f64; 3]> {
+            vs.iter().map(|v| [v.x, v.y, v.z]).collect()
+        };
+        let out = PyDict::new(py);
+        out.set_item("time", seen.time.as_secs_f64())?;
+        out.set_item(
+            "bodies",
+            scenario.bodies.iter().map(|b| b.id).collect::<Vec<u32>>(),
+        )?;
+        out.set_item("p", xyz(&seen.p))?;
+        out.set_item("v", xyz(&seen.v))?;
+        out.set_item("omega", xyz(&seen.omega))?;
+        let q: Vec<[f64; 4]> = seen.q.iter().map(|q| [q.w, q.i, q.j, q.k]).collect();
+        out.set_item("q", q)?;
+        out.set_item("rows", rows)?;
+        out.set_item("w", seen.w)?;
+        out.set_item("f", seen.f)?;
+        out.set_item("max_w", seen.max_w)?;
+        let signals = PyDict::new(py);
+        for (name, value) in signal_names.into_iter().zip(seen.signals) {
+            signals.set_item(name, value)?;
+        }
+        out.set_item("signals", signals)?;
+        Ok(out)
+    }
+
     /// An independent copy to try something on: advancing or steering it leaves this
     /// one as it was.
     fn fork(&self, py: Python<'_>) -> PyResult<PyCoSim> {

@@ -412,3 +412,37 @@ def test_a_sweep_on_a_ray_pool_writes_the_command_lines_table(tmp_path):
         import ray
         ray.shutdown()
     assert (tmp_path / "ray" / "sweep.csv").read_bytes() == cli
+
+
+def test_observe_gives_the_state_the_trace_records_at_now_and_changes_nothing(tmp_path):
+    sim = dsmcosim.CoSim(FIXED, duration=2.0)
+    sim.advance(1.0)
+    seen = sim.observe()
+    assert seen.time == 1.0 and sim.now == 1.0
+    assert seen.positions.shape == (16, 3) and seen.rows[:2] == ["L1", "L2"]
+    cli = dsmcosim.run(FIXED, tmp_path, duration=2.0)
+    row = cli.trace[cli.trace["t"] == 1.0].iloc[0]
+    assert [row[f"w_{r}"] for r in seen.rows] == list(seen.w)
+    assert [row[f"f_{r}"] for r in seen.rows] == list(seen.f)
+    for k, body in enumerate(seen.bodies):
+        if f"px_B{body}" in row:
+            assert [row[f"{a}_B{body}"] for a in ("px", "py", "pz")] == list(seen.positions[k])
+            assert [row[f"{a}_B{body}"] for a in ("vx", "vy", "vz")] == list(seen.velocities[k])
+    assert seen.max_w == max(abs(seen.w))
+    sim.advance(2.0)
+    assert sim.digest == cli.digest, "observing changed nothing"
+    end = sim.observe()
+    assert end.time == 2.0 and list(end.w) == [cli.trace.iloc[-1][f"w_{r}"] for r in end.rows]
+
+
+def test_observe_reads_an_fmus_outputs(tmp_path):
+    fmu = SCENARIOS / "fmu" / "msd.fmu"
+    if not fmu.is_file():
+        pytest.skip("the test FMUs are built by `cargo run --release --example build_fmus "
+                    "-- scenarios/fmu`")
+    sim = dsmcosim.CoSim(SCENARIOS / "fmu_pd_loop.json", duration=1.0)
+    sim.advance(0.5)
+    seen = sim.observe()
+    cli = dsmcosim.run(SCENARIOS / "fmu_pd_loop.json", tmp_path, duration=1.0)
+    row = cli.trace[cli.trace["t"] == 0.5].iloc[0]
+    assert seen.signals and all(row[name] == value for name, value in seen.signals.items())

@@ -61,6 +61,51 @@ impl StepValues<'_> {
     }
 }
 
+/// The values one step records, owned: [`CoSim::observe`]'s answer.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Observation {
+    /// The step's time.
+    pub time: SimTime,
+    /// Constraint values w per row (links, then joints' rows, in file order) [m].
+    pub w: Vec<f64>,
+    /// Row forces f [N].
+    pub f: Vec<f64>,
+    /// Body positions [m], in the scenario's body order.
+    pub p: Vec<Vector3<f64>>,
+    /// Body velocities [m/s].
+    pub v: Vec<Vector3<f64>>,
+    /// Body orientations (body → world); empty on the point-mass path.
+    pub q: Vec<Quaternion<f64>>,
+    /// Body angular velocities in the world frame [rad/s]; empty on the point-mass path.
+    pub omega: Vec<Vector3<f64>>,
+    /// Largest `|w|` [m] (0 without rows).
+    pub max_w: f64,
+    /// The traced FMU outputs, in trace column order.
+    pub signals: Vec<f64>,
+}
+
+/// The observer of [`CoSim::observe`]'s fork: keeps the first step's values.
+struct Seen(Option<Observation>);
+
+impl Observer for Seen {
+    fn on_step(&mut self, s: &StepValues) -> std::io::Result<()> {
+        if self.0.is_none() {
+            self.0 = Some(Observation {
+                time: s.time,
+                w: s.w.to_vec(),
+                f: s.f.to_vec(),
+                p: s.p.to_vec(),
+                v: s.v.to_vec(),
+                q: s.q.to_vec(),
+                omega: s.omega.to_vec(),
+                max_w: s.max_w,
+                signals: s.signals.to_vec(),
+            });
+        }
+        Ok(())
+    }
+}
+
 /// Something that watches every step (the recorder; nothing for a what-if fork).
 pub trait Observer {
     /// Called once per step with the values at the step's start.
@@ -468,6 +513,40 @@ impl CoSim {
             return end;
         }
         SimTime(self.steps_done.saturating_mul(self.scenario.dt.0)).min(end)
+    }
+
+    /// The state at [`reached`](Self::reached) as the step there records it — the
+    /// bodies, every constraint row's `w` and `f`, the traced FMU outputs — measured on
+    /// a fork (this world is untouched, its digest unchanged): an embedding's look
+    /// between two calls (the Python package's `CoSim.observe`). Once
+    /// [`finished`](Self::finished), the last step's values.
+    pub fn observe(&self) -> Result<Observation> {
+        if self.finished() {
+            return Ok(Observation {
+                time: self.reached(),
+                w: self.w.clone(),
+                f: self.f.clone(),
+                p: self.p.clone(),
+                v: self.v.clone(),
+                q: self.q.clone(),
+                omega: self.omega.clone(),
+                max_w: self.w.iter().fold(0.0, |m, w| m.max(w.abs())),
+                signals: self.signals.clone(),
+            });
+        }
+        let mut probe = self.clone();
+        let mut seen = Seen(None);
+        let before = probe.steps_done;
+        while probe.steps_done == before {
+            let Some((_, class)) = probe.next_key() else {
+                break;
+            };
+            probe.next_event(class, &mut seen)?;
+        }
+        seen.0.ok_or_else(|| Error::Numerical {
+            time: self.reached(),
+            message: "no step left to observe".to_string(),
+        })
     }
 
     /// Whether every event up to the end of the run has been processed.
