@@ -35,7 +35,7 @@ use plotters::style::RGBColor;
 use crate::error::Error;
 
 pub use heatmap::{heatmap_svg, write_heatmap, CellClass, Heatmap};
-pub use line::{line_plot_svg, write_line_plot, LinePlot, Series};
+pub use line::{line_plot_svg, write_line_plot, write_panels, LinePlot, Series};
 pub use timeline::{slot_timeline_svg, write_slot_timeline, SlotTimeline};
 
 /// How values are placed along an axis.

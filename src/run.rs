@@ -705,6 +705,9 @@ fn plot(
     )
 }
 
+/// FMU outputs drawn in `signals.svg`, one panel each.
+const SIGNAL_PANELS: usize = 12;
+
 /// Links of largest `max |w|` drawn one line each in the constraint plot of a scene
 /// with more than [`envelope::FEW`] links.
 const WORST_LINKS: usize = 4;
@@ -753,17 +756,27 @@ fn write_plots(out: &Path, world: &CoSim, rec: &Recorder) -> Result<()> {
             false,
         )?;
     }
+    // Each FMU output on its own axes: an FMU's variables have units of their own
+    // (a position, a force), which one axis would mix. At most the first
+    // [`SIGNAL_PANELS`]; trace.csv holds them all.
     let signals = rec.signal_series();
-    if !signals.is_empty() {
-        plot(
-            out,
-            "signals.svg",
-            &title("FMU outputs"),
-            time,
-            "output value [the variable's unit]",
-            &signals,
-            false,
-        )?;
+    let titles: Vec<String> = signals
+        .iter()
+        .take(SIGNAL_PANELS)
+        .map(|s| format!("FMU output {}", s.label))
+        .collect();
+    let labels: Vec<String> = signals
+        .iter()
+        .take(SIGNAL_PANELS)
+        .map(|s| format!("{} [the FMU's unit]", s.label))
+        .collect();
+    let panels: Vec<LinePlot> = signals
+        .iter()
+        .zip(titles.iter().zip(&labels))
+        .map(|(s, (title, label))| LinePlot::new(title, time, label, std::slice::from_ref(s)))
+        .collect();
+    if !panels.is_empty() {
+        crate::report::write_panels(&out.join("signals.svg"), &panels)?;
     }
     let spins = rec.angular_velocity_series();
     if !spins.is_empty() {
@@ -789,16 +802,26 @@ fn write_plots(out: &Path, world: &CoSim, rec: &Recorder) -> Result<()> {
         }
         Series::new(label, points)
     };
-    let period = world.scenario().measurement_period.as_secs_f64();
-    plot(
-        out,
-        "cost.svg",
-        &title(&format!("cost per window (T = {period} s)")),
-        "time t [s]",
-        "cost C [m]",
-        &[per_epoch("cost C".into(), &|e| e.cost)],
-        true,
-    )?;
+    // The cost is Σ RMS w over the rows [m], or the measured signals' (in their own
+    // units); a scene with neither measures nothing and gets no cost plot.
+    let scenario = world.scenario();
+    let measured = !scenario.cost_signals.is_empty();
+    if measured || !scenario.links.is_empty() {
+        let period = scenario.measurement_period.as_secs_f64();
+        plot(
+            out,
+            "cost.svg",
+            &title(&format!("cost per window (T = {period} s)")),
+            "time t [s]",
+            if measured {
+                "cost C [the measured signals' units]"
+            } else {
+                "cost C [m]"
+            },
+            &[per_epoch("cost C".into(), &|e| e.cost)],
+            true,
+        )?;
+    }
     if world.channels().is_empty() {
         return Ok(());
     }

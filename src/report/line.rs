@@ -173,6 +173,31 @@ pub fn write_line_plot(path: &Path, plot: &LinePlot) -> Result<()> {
     write_atomic(path, svg.as_bytes())
 }
 
+/// Panels drawn side by side in one SVG document, two to a row, each a 960 × 540 px
+/// [`LinePlot`] with its own axes: quantities of different units (an FMU's position,
+/// velocity and force) each on their own scale. The panels are the plots' own SVG
+/// documents nested at their offsets, so each reads as it would alone.
+pub fn write_panels(path: &Path, panels: &[LinePlot]) -> Result<()> {
+    let (w, h) = SIZE;
+    let columns = panels.len().clamp(1, 2) as u32;
+    let rows = (panels.len() as u32).div_ceil(columns).max(1);
+    let (width, height) = (w * columns, h * rows);
+    let mut svg = format!(
+        "<svg width=\"{width}\" height=\"{height}\" viewBox=\"0 0 {width} {height}\" \
+         xmlns=\"http://www.w3.org/2000/svg\">\n"
+    );
+    for (k, panel) in panels.iter().enumerate() {
+        let inner = render(panel, path)?;
+        let (x, y) = ((k as u32 % columns) * w, (k as u32 / columns) * h);
+        // `<svg width=…` becomes `<svg x=… y=… width=…`: the panel at its place.
+        let placed = inner.replacen("<svg ", &format!("<svg x=\"{x}\" y=\"{y}\" "), 1);
+        svg.push_str(&placed);
+        svg.push('\n');
+    }
+    svg.push_str("</svg>\n");
+    write_atomic(path, svg.as_bytes())
+}
+
 /// What is drawn of one series.
 struct Prepared {
     /// Unbroken runs of points (staircased and decimated as asked).

@@ -230,8 +230,11 @@ impl Recorder {
                 head.push_str(&format!(",{ax}_B{id}"));
             }
         }
-        for name in INVARIANT_COLUMNS {
-            head.push_str(&format!(",{name}"));
+        // A scene without bodies (FMUs only) has no momenta or energy to show.
+        if !body_ids.is_empty() {
+            for name in INVARIANT_COLUMNS {
+                head.push_str(&format!(",{name}"));
+            }
         }
         if self.rotation {
             for &i in &self.trace_bodies {
@@ -344,11 +347,13 @@ impl Recorder {
                 let _ = write!(self.line, ",{x}");
             }
         }
-        let (m, l) = (&invariants.momentum, &invariants.angular_momentum);
-        for x in m.iter().chain(l.iter()) {
-            let _ = write!(self.line, ",{x}");
+        if !s.bodies.is_empty() {
+            let (m, l) = (&invariants.momentum, &invariants.angular_momentum);
+            for x in m.iter().chain(l.iter()) {
+                let _ = write!(self.line, ",{x}");
+            }
+            let _ = write!(self.line, ",{}", invariants.kinetic_energy);
         }
-        let _ = write!(self.line, ",{}", invariants.kinetic_energy);
         if self.rotation {
             for &i in &self.trace_bodies {
                 // Point masses have no rotation state: identity and zero.
