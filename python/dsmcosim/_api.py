@@ -222,7 +222,8 @@ class Run:
 
     def table(self, name: str, columns: Optional[Sequence[str]] = None) -> Optional[pd.DataFrame]:
         """Table `name` ("trace", "epochs" or "network") read from its file, only
-        `columns` if given (a large trace read in part); None if the run wrote none."""
+        `columns` if given (a large trace read in part); None if the run wrote none.
+        """
         if name not in _TABLES:
             raise ValueError(f"a run's tables are {', '.join(_TABLES)}, not {name!r}")
         path = self.directory / _TABLES[name]
@@ -689,8 +690,13 @@ class Observation:
     `velocities` [m/s], `angular_velocities` [rad/s] (n × 3, world frame),
     `orientations` (n × 4 unit quaternions w, x, y, z, body to world; 0 × 4 for point
     masses), `rows` (constraint rows' names, `L1` or `J2_0`, as trace.csv names them),
-    `w` [m] and `f` [N] per row, `max_w` [m], and `signals` (each traced FMU output by
-    its trace column name, `unit.variable`)."""
+    `w` [m] and `f` [N] per row, `max_w` [m], `signals` (each traced FMU output by
+    its trace column name, `unit.variable`), and `deliveries`: a DataFrame with the
+    last delivery on every route seen since the co-simulation was made or forked (a
+    resumed or unpickled one starts with none) — `channel`, `from_node`, `to_node`
+    (1-based), `kind` (`state`, `force`, `line`, `signal`), `element` (the body `B3`,
+    the link `L5`, or `connections[i]`), the sample's time `sent`, its `delivered` time
+    and its `age` at `time` [s]."""
 
     def __init__(self, seen: Mapping[str, Any]):
         import numpy as np
@@ -705,6 +711,12 @@ class Observation:
         self.f = np.asarray(seen["f"], dtype=np.float64)
         self.max_w: float = seen["max_w"]
         self.signals: Dict[str, float] = dict(seen["signals"])
+        self.deliveries = pd.DataFrame(
+            list(seen["deliveries"]),
+            columns=["channel", "from_node", "to_node", "kind", "element", "sent",
+                     "delivered"]).astype({"from_node": "int64", "to_node": "int64",
+                                           "sent": "float64", "delivered": "float64"})
+        self.deliveries["age"] = self.time - self.deliveries["sent"]
 
     def __repr__(self) -> str:
         return (f"Observation(time={self.time:g} s, {len(self.bodies)} bodies, "

@@ -8,15 +8,19 @@
 //! becomes the exception of `dsmcosim._errors` its kind calls for, with the field, the
 //! message and the exit code the command line would print and return.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
+use dsmcosim::control::experiment::WindowReport;
 use dsmcosim::control::Plant;
-use dsmcosim::cosim::CoSim;
+use dsmcosim::cosim::{CoSim, EpochRecord, Observer, StepValues};
 use dsmcosim::error::Place;
 use dsmcosim::kernel::SimTime;
+use dsmcosim::network::message::{Message, Payload};
+use dsmcosim::network::tdma::CycleReport;
 use dsmcosim::progress::{reporting_to, Listener};
 use dsmcosim::run::plan::RunPlan;
 use dsmcosim::run::RunOptions;
@@ -457,6 +461,52 @@ struct PyCoSim {
     recorder: Recorder,
     /// Every `set_periods` call: when, and the periods asked [s].
     decisions: Vec<(SimTime, Vec<f64>)>,
+    /// The last delivery on every route since this co-simulation was made or forked.
+    deliveries: Deliveries,
+}
+
+/// The last delivery on every route a `CoSim` has seen since it was made (or forked):
+/// by (channel, sending node, receiving node, kind, element: the body of a state, the
+/// link of a force or a line's wave, the connection of an FMU signal), the sample's
+/// time and its delivery's.
+type Deliveries = BTreeMap<(usize, usize, usize, &'static str, usize), (SimTime, SimTime)>;
+
+/// The recorder, with every delivery also noted in [`Deliveries`].
+struct Noting<'a> {
+    recorder: &'a mut Recorder,
+    deliveries: &'a mut Deliveries,
+}
+
+impl Observer for Noting<'_> {
+    fn on_step(&mut self, values: &StepValues) -> std::io::Result<()> {
+        self.recorder.on_step(values)
+    }
+
+    fn on_cycle(&mut self, report: &CycleReport) -> std::io::Result<()> {
+        self.recorder.on_cycle(report)
+    }
+
+    fn on_delivery(&mut self, t: SimTime, msg: &Message) {
+        let (kind, element) = match &msg.payload {
+            Payload::State { body, .. } => ("state", *body),
+            Payload::Force { link, .. } => ("force", *link),
+            Payload::Line(line) => ("line", line.link),
+            Payload::Signal { connection, .. } => ("signal", *connection),
+        };
+        self.deliveries.insert(
+            (msg.channel, msg.from, msg.to, kind, element),
+            (msg.sent, t),
+        );
+        self.recorder.on_delivery(t, msg);
+    }
+
+    fn on_epoch(&mut self, epoch: &EpochRecord) {
+        self.recorder.on_epoch(epoch);
+    }
+
+    fn on_window(&mut self, report: &WindowReport) {
+        Observer::on_window(self.recorder, report);
+    }
 }
 
 /// Simulated time [s] as the kernel's nanoseconds, or an error naming `what`.
@@ -495,6 +545,7 @@ impl PyCoSim {
             world: CoSim::new(scenario),
             recorder,
             decisions: Vec::new(),
+            deliveries: Deliveries::new(),
         })
     }
 
@@ -508,6 +559,7 @@ impl PyCoSim {
             world: self.world.clone(),
             recorder,
             decisions: self.decisions.clone(),
+            deliveries: self.deliveries.clone(),
         })
     }
 }
@@ -543,6 +595,7 @@ impl PyCoSim {
             world: cp.world,
             recorder: cp.recorder,
             decisions: Vec::new(),
+            deliveries: Deliveries::new(),
         })
     }
 
@@ -611,7 +664,11 @@ impl PyCoSim {
     /// refused. Raises on divergence; Ctrl-C stops it at the next slice of steps (`now`
     /// says where) and raises `KeyboardInterrupt`.
     fn advance(&mut self, py: Python<'_>, t: f64) -> PyResult<()> {
-        let (world, recorder) = (&mut self.world, &mut self.recorder);
+        let world = &mut self.world;
+        let mut noting = Noting {
+            recorder: &mut self.recorder,
+            deliveries: &mut self.deliveries,
+        };
         let target = (|| -> dsmcosim::Result<SimTime> {
             let asked = sim_time("t", t)?;
             let (dt, end, now) = (
@@ -642,14 +699,14 @@ impl PyCoSim {
             loop {
                 let now = world.reached();
                 let next = SimTime(now.0.saturating_add(slice)).min(target);
-                Plant::advance_to(world, next, recorder)?;
+                world.advance_to(next, &mut noting)?;
                 if next == target || dsmcosim::interrupt::requested() {
                     break;
                 }
             }
             if target == end && !dsmcosim::interrupt::requested() {
                 // The end: the step at `duration` too, as a run to its end takes it.
-                world.run_to_end(recorder)?;
+                world.run_to_end(&mut noting)?;
             }
             Ok(())
         })?;
@@ -793,6 +850,27 @@ impl PyCoSim {
             signals.set_item(name, value)?;
         }
         out.set_item("signals", signals)?;
+        let channels = self.world.channels();
+        let deliveries: Vec<_> = self
+            .deliveries
+            .iter()
+            .map(|(&(c, from, to, kind, element), &(sent, delivered))| {
+                let name = channels
+                    .get(c)
+                    .map_or(String::new(), |ch| ch.spec.name.clone());
+                let element = match kind {
+                    "state" => scenario
+                        .bodies
+                        .get(element)
+                        .map_or(String::new(), |b| format!("B{}", b.id)),
+                    "signal" => format!("connections[{element}]"),
+                    _ => dsmcosim::scenario::model::row_name(element, None),
+                };
+                let times = (sent.as_secs_f64(), delivered.as_secs_f64());
+                (name, from + 1, to + 1, kind, element, times.0, times.1)
+            })
+            .collect();
+        out.set_item("deliveries", deliveries)?;
         Ok(out)
     }
 
@@ -847,6 +925,7 @@ impl PyCoSim {
             world: cp.world,
             recorder: cp.recorder,
             decisions,
+            deliveries: Deliveries::new(),
         })
     }
 }

@@ -446,3 +446,15 @@ def test_observe_reads_an_fmus_outputs(tmp_path):
     cli = dsmcosim.run(SCENARIOS / "fmu_pd_loop.json", tmp_path, duration=1.0)
     row = cli.trace[cli.trace["t"] == 0.5].iloc[0]
     assert seen.signals and all(row[name] == value for name, value in seen.signals.items())
+
+
+def test_observe_lists_the_last_delivery_on_every_route():
+    sim = dsmcosim.CoSim(FIXED, duration=1.0)
+    sim.advance(0.1)
+    d = sim.observe().deliveries
+    assert set(d["channel"]) == {"tau1", "tau2"} and set(d["kind"]) <= {"state", "force"}
+    assert (d["sent"] <= d["delivered"]).all() and (d["delivered"] <= 0.1).all()
+    assert (d["age"] >= 0).all() and (d["age"] <= 0.1).all()
+    assert len(d) == len(d.drop_duplicates(["channel", "from_node", "to_node", "kind",
+                                            "element"]))
+    assert sim.fork().observe().deliveries.equals(d)
