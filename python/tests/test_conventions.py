@@ -458,3 +458,37 @@ def test_observe_lists_the_last_delivery_on_every_route():
     assert len(d) == len(d.drop_duplicates(["channel", "from_node", "to_node", "kind",
                                             "element"]))
     assert sim.fork().observe().deliveries.equals(d)
+
+
+def test_a_jupyter_kernel_interrupt_stops_a_run(tmp_path):
+    """A notebook's "Interrupt kernel": a real IPython kernel runs a long run in a cell;
+    the interrupt ends the cell with KeyboardInterrupt, and the kernel runs the next
+    cell."""
+    manager_module = pytest.importorskip("jupyter_client.manager")
+    pytest.importorskip("ipykernel")
+    import queue
+    manager, client = manager_module.start_new_kernel(kernel_name="python3", cwd=str(REPO))
+    try:
+        client.execute("import dsmcosim")
+        client.get_shell_msg(timeout=60)
+        cell = client.execute(
+            f"dsmcosim.run({str(LARGE)!r}, {str(tmp_path)!r}, duration=30.0)")
+        while True:  # the cell is running once the kernel says busy
+            msg = client.get_iopub_msg(timeout=60)
+            if msg["msg_type"] == "status" and msg["content"]["execution_state"] == "busy" \
+                    and msg["parent_header"].get("msg_id") == cell:
+                break
+        with pytest.raises(queue.Empty):
+            client.get_shell_msg(timeout=1.0)  # still running a second later
+        manager.interrupt_kernel()
+        reply = client.get_shell_msg(timeout=120)
+        assert reply["parent_header"]["msg_id"] == cell
+        assert reply["content"]["status"] == "error"
+        assert reply["content"]["ename"] == "KeyboardInterrupt"
+        summary = json.loads((tmp_path / "summary.json").read_text())
+        assert summary["status"] == "interrupted" and summary["steps"] < 30000
+        client.execute("x = 1 + 1")
+        assert client.get_shell_msg(timeout=60)["content"]["status"] == "ok"
+    finally:
+        client.stop_channels()
+        manager.shutdown_kernel(now=True)
