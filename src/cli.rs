@@ -713,8 +713,9 @@ pub fn execute(command: Command) -> crate::Result<()> {
                 let plan = crate::run::plan::plan(&s)?;
                 say!("{}: {}", scenario.display(), plan.text());
             }
-            let outcome = crate::run::run_keeping_scenario(&s, &text, &out, options)?;
-            report(&s.name, &outcome, &out);
+            let name = s.name.clone();
+            let outcome = crate::run::run_keeping_scenario(s, &text, &out, options)?;
+            report(&name, &outcome, &out);
             Ok(())
         }
         Command::Resume {

@@ -7,6 +7,7 @@
 //! returns the divergence error.
 
 use std::path::Path;
+use std::sync::Arc;
 use std::time::Instant;
 
 use serde_json::{json, Value};
@@ -138,6 +139,13 @@ pub fn preflight(scenario: &Scenario, options: &RunOptions) -> Result<Option<Con
 
 /// Runs `scenario` with `options` and writes its outputs into `out`.
 pub fn run_with(scenario: &Scenario, out: &Path, options: RunOptions) -> Result<Outcome> {
+    run_shared(Arc::new(scenario.clone()), out, options)
+}
+
+/// [`run_with`] on a scenario the caller hands over: the run's world holds it without
+/// a copy.
+pub fn run_shared(shared: Arc<Scenario>, out: &Path, options: RunOptions) -> Result<Outcome> {
+    let scenario = &*shared;
     let controller = preflight(scenario, &options)?;
     let dir = claim(out, &scenario.name, options.force)?;
     let trace_path = out.join("trace.csv");
@@ -148,7 +156,7 @@ pub fn run_with(scenario: &Scenario, out: &Path, options: RunOptions) -> Result<
     };
     let mut recorder =
         Recorder::for_scenario(file, scenario).map_err(|e| Error::io(&trace_path, e))?;
-    let world = CoSim::new(scenario);
+    let world = CoSim::shared(Arc::clone(&shared));
     if world.tdma().is_some() {
         let path = out.join("network.csv");
         let names = scenario.channels.iter().map(|c| c.name.clone()).collect();
@@ -179,12 +187,12 @@ pub fn run_with(scenario: &Scenario, out: &Path, options: RunOptions) -> Result<
 /// and an interrupted one is continued from its checkpoint with its scenario in view).
 /// `dsmcosim run` and the Python package call it.
 pub fn run_keeping_scenario(
-    scenario: &Scenario,
+    scenario: Scenario,
     text: &str,
     out: &Path,
     options: RunOptions,
 ) -> Result<Outcome> {
-    let result = run_with(scenario, out, options);
+    let result = run_shared(Arc::new(scenario), out, options);
     if result.is_ok()
         || matches!(
             result,

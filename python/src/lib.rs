@@ -295,7 +295,7 @@ fn run<'py>(
                 force,
                 ..RunOptions::default()
             };
-            dsmcosim::run::run_keeping_scenario(&scenario, &text, &out, options)
+            dsmcosim::run::run_keeping_scenario(scenario, &text, &out, options)
                 .map(|outcome| outcome.warnings())
         })
     })?;

@@ -294,6 +294,13 @@ fn parallel_min_links_default() -> usize {
 impl CoSim {
     /// Builds the world of a validated scenario, with its first events scheduled.
     pub fn new(scenario: &Scenario) -> CoSim {
+        CoSim::shared(Arc::new(scenario.clone()))
+    }
+
+    /// [`CoSim::new`] on a scenario the caller hands over: the world holds it without a
+    /// copy (a million-body grid's bodies and links are 360 MB).
+    pub fn shared(shared: Arc<Scenario>) -> CoSim {
+        let scenario = &*shared;
         let layout = Layout::new(scenario);
         let (channels, tdma) =
             network_of(scenario, &layout).expect("ok: validation built this network once already");
@@ -381,7 +388,6 @@ impl CoSim {
                 },
                 scenario.dt,
             ),
-            scenario: Arc::new(scenario.clone()),
             layout: Arc::new(layout),
             kernel,
             nodes,
@@ -405,6 +411,7 @@ impl CoSim {
             fmus: scenario.fmus.iter().map(FmuUnit::new).collect(),
             signals: Vec::new(),
             parallel_min_links: PARALLEL_MIN_LINKS,
+            scenario: shared,
         }
     }
 
@@ -1306,7 +1313,43 @@ fn body_finite(p: &Vector3<f64>, v: &Vector3<f64>) -> bool {
 
 #[cfg(test)]
 mod tests {
-    use super::link_fault;
+    use super::{link_fault, CoSim};
+    use std::sync::Arc;
+
+    fn grid(partition: bool) -> crate::scenario::Scenario {
+        let mut v = serde_json::json!({
+            "name": "g", "seed": 1, "duration": 0.01, "dt": 0.001,
+            "model": {"grid": {"rows": 4, "cols": 4, "spacing": 1.8, "mass": 1.0, "size": 0.2}},
+            "measurement": {"period": 0.01}
+        });
+        if partition {
+            v["partition"] = serde_json::json!({"quadrants": true});
+            v["channels"] = serde_json::json!([{"name": "c", "tau": 0.005,
+                "borders": [[1, 2], [1, 4], [2, 3], [3, 4]]}]);
+        }
+        crate::scenario::parse_str(&v.to_string(), "g").expect("a valid scene")
+    }
+
+    #[test]
+    fn a_monolithic_world_holds_the_model_once() {
+        let scenario = Arc::new(grid(false));
+        let world = CoSim::shared(Arc::clone(&scenario));
+        // The world, its one node's system and the caller share one scenario, one copy
+        // of the bodies and one of the links.
+        assert!(Arc::ptr_eq(&world.scenario, &scenario));
+        let system = &world.nodes[0].system;
+        assert!(Arc::ptr_eq(&system.links, &scenario.links));
+        // A fork shares them too.
+        let fork = world.clone();
+        assert!(Arc::ptr_eq(&fork.nodes[0].system.links, &scenario.links));
+        // A partitioned world's nodes hold their own parts, in their own numbering.
+        let parted = CoSim::new(&grid(true));
+        assert!(parted.nodes.len() == 4);
+        assert!(parted
+            .nodes
+            .iter()
+            .all(|n| !Arc::ptr_eq(&n.system.links, &parted.scenario.links)));
+    }
 
     #[test]
     fn a_link_fault_prints_short_numbers() {

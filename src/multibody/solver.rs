@@ -85,19 +85,24 @@ pub enum SolveError {
 /// One contribution to an entry of `A` through a shared body.
 #[derive(Debug, Clone, Copy, serde::Serialize, serde::Deserialize)]
 ///
-/// Indices are `u32` (as the CG path's, [`cg`]): a million-body grid has about 10⁷
-/// entries, 32 bytes each instead of 48. A checkpoint stores them as before (postcard
-/// writes `u32` and `usize` as the same varint).
+/// Indices are `u32` (as the CG path's, [`cg`]) and the sign follows from the two
+/// sides: a million-body grid has about 10⁷ entries, 20 bytes each instead of 48.
 struct Entry {
     body: u32,
     k: u32,
     l: u32,
     /// Index into the matrix values (the sparse pattern's slot, or `k·m + l` dense).
     value: u32,
-    /// Product of the two links' signs on the body (+1 for side `a`, −1 for side `b`).
-    sign: f64,
     side_k: Side,
     side_l: Side,
+}
+
+impl Entry {
+    /// Whether the two links hold the body on the same side: the product of their signs
+    /// (+1 for side `a`, −1 for side `b`) is then +1.
+    fn same_side(&self) -> bool {
+        self.side_k == self.side_l
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -330,13 +335,11 @@ impl Exact {
                     if k < l {
                         continue;
                     }
-                    let sign = if sk == sl { 1.0 } else { -1.0 };
                     entries.push(Entry {
                         body: idx(body),
                         k: idx(k),
                         l: idx(l),
                         value: idx(if dense { k * m + l } else { slots[&(l, k)] }),
-                        sign,
                         side_k: sk,
                         side_l: sl,
                     });
@@ -373,7 +376,12 @@ impl Exact {
             if rigid {
                 v += c(k, e.side_k).dot(&(mass.inv_inertia[body] * c(l, e.side_l)));
             }
-            values[e.value as usize] += e.sign * v;
+            // `+ (−1 · v)` as it was written: `− v`, the same bits.
+            if e.same_side() {
+                values[e.value as usize] += v;
+            } else {
+                values[e.value as usize] -= v;
+            }
         }
     }
 
@@ -941,6 +949,44 @@ mod tests {
                 "{d:?} vs {o:?}"
             );
         }
+    }
+
+    #[test]
+    fn the_estimates_analysis_is_the_one_the_solver_factorizes() {
+        // Above the supernodal size, as a large run: the budget's estimate analyses the
+        // pattern, and the run's first solve takes that analysis instead of redoing it.
+        let m = ordered::SUPERNODAL_MIN_LINKS + 10;
+        let (geo, mass) = chain(m);
+        let b: Vec<f64> = (0..m).map(|k| (k as f64).cos()).collect();
+        let solve = || {
+            let mut s = JsSolver::new(Solver::Cholesky, m + 1, &geo.ends);
+            let mut x = vec![0.0; m];
+            s.solve(&geo, &mass, &b, &mut x).unwrap();
+            x
+        };
+        let count = || ordered::ANALYSES.with(|c| c.get());
+        let before = count();
+        let alone = solve();
+        assert_eq!(count(), before + 1);
+        // The kept analysis is the process's one: another test's estimate on another
+        // thread may replace it in between, so a few tries; without the hand-over every
+        // try analyses twice.
+        let handed_over = (0..5).any(|_| {
+            let start = count();
+            let entries = exact_factor_entries(m + 1, &geo.ends).unwrap();
+            assert!(entries >= m as u64);
+            let after_estimate = solve();
+            assert_eq!(
+                alone, after_estimate,
+                "the kept analysis gives the same bits"
+            );
+            count() == start + 1
+        });
+        assert!(handed_over, "the solve after the estimate analysed again");
+        // Taken once: the next solver of the pattern analyses it itself.
+        let start = count();
+        solve();
+        assert_eq!(count(), start + 1);
     }
 
     #[test]

@@ -9,27 +9,9 @@ use crate::scenario::model::{
     BodyModel, ForceSpec, Integrator, RowKind, Scenario, SpringSpec, Stabilizer,
 };
 
-/// One distance link, with body indices resolved.
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Link {
-    /// Index of body `a`.
-    pub a: usize,
-    /// Index of body `b`.
-    pub b: usize,
-    /// Length L [m].
-    pub length: f64,
-    /// Anchor on `a` in the body frame [m].
-    pub anchor_a: Vector3<f64>,
-    /// Anchor on `b` in the body frame [m]; on a world row, the fixed world point.
-    pub anchor_b: Vector3<f64>,
-    /// What the row holds (a link: [`RowKind::Distance`]).
-    pub kind: RowKind,
-    /// Whether side `b` is the world: the solver sees it as one more body, immovable
-    /// and without state.
-    pub world: bool,
-    /// For a joint's row: (joint, row), as [`crate::scenario::model::LinkSpec::joint`].
-    pub joint: Option<(u32, u32)>,
-}
+/// One constraint row (a distance link or a joint's row), with body indices resolved:
+/// the scenario's own [`crate::scenario::model::LinkSpec`], shared with it.
+pub type Link = crate::scenario::model::LinkSpec;
 
 /// A multi-body system ready to integrate: model data, stabilizer, integrator and all
 /// scratch memory (no allocation happens inside a step).
@@ -37,7 +19,7 @@ pub struct Link {
 pub struct System {
     pub(crate) rigid: bool,
     pub(crate) inertia: Vec<Vector3<f64>>,
-    pub(crate) links: Vec<Link>,
+    pub(crate) links: std::sync::Arc<[Link]>,
     pub(crate) forces: Vec<ForceSpec>,
     /// Spring-dampers (local body indices); empty: none, and no arithmetic.
     pub(crate) springs: Vec<SpringSpec>,
@@ -138,20 +120,8 @@ impl System {
     /// Builds the system of a validated scenario.
     pub fn new(scenario: &Scenario) -> System {
         let rigid = scenario.body_model == BodyModel::Rigid;
-        let links: Vec<Link> = scenario
-            .links
-            .iter()
-            .map(|l| Link {
-                a: l.a,
-                b: l.b,
-                length: l.length,
-                anchor_a: l.anchor_a,
-                anchor_b: l.anchor_b,
-                kind: l.kind.clone(),
-                world: l.world,
-                joint: l.joint,
-            })
-            .collect();
+        // The scenario's rows themselves, not a copy: the model is held once.
+        let links = std::sync::Arc::clone(&scenario.links);
         let mut inv_mass: Vec<f64> = scenario.bodies.iter().map(|b| 1.0 / b.mass).collect();
         let inertia = scenario.bodies.iter().map(|b| b.inertia).collect();
         let nb = inv_mass.len();

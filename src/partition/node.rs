@@ -146,16 +146,24 @@ impl Node {
             .filter(|&l| !lines.is_line(l))
             .collect();
         let mut sub = scenario.clone();
-        sub.bodies = bodies.iter().map(|&g| scenario.bodies[g].clone()).collect();
-        sub.links = links
-            .iter()
-            .map(|&l| {
-                let mut spec = scenario.links[l].clone();
-                spec.a = local_body[&spec.a];
-                spec.b = local_body[&spec.b];
-                spec
-            })
-            .collect();
+        // A node that holds the whole model in the file's order (a monolithic run's)
+        // shares the scenario's bodies and links: the model is held once.
+        let whole = bodies.len() == scenario.bodies.len()
+            && bodies.iter().enumerate().all(|(l, &g)| l == g)
+            && links.len() == scenario.links.len()
+            && links.iter().enumerate().all(|(k, &g)| k == g);
+        if !whole {
+            sub.bodies = bodies.iter().map(|&g| scenario.bodies[g].clone()).collect();
+            sub.links = links
+                .iter()
+                .map(|&l| {
+                    let mut spec = scenario.links[l].clone();
+                    spec.a = local_body[&spec.a];
+                    spec.b = local_body[&spec.b];
+                    spec
+                })
+                .collect();
+        }
         sub.forces = scenario
             .forces
             .iter()

@@ -196,8 +196,16 @@ pub struct Estimate {
 /// are bounded before this is called). A partitioned run's nodes factorize parts of the
 /// scene, with a few ghost links each.
 fn factor_entries(scenario: &Scenario) -> u64 {
-    let ends: Vec<(usize, usize)> = scenario.links.iter().map(|l| (l.a, l.b)).collect();
-    crate::multibody::solver::exact_factor_entries(scenario.bodies.len(), &ends).unwrap_or(u64::MAX)
+    // As the solver sees the rows: one held to the world ends on one more body.
+    let nb = scenario.bodies.len();
+    let world = scenario.links.iter().any(|l| l.world);
+    let ends: Vec<(usize, usize)> = scenario
+        .links
+        .iter()
+        .map(|l| (l.a, if l.world { nb } else { l.b }))
+        .collect();
+    crate::multibody::solver::exact_factor_entries(nb + usize::from(world), &ends)
+        .unwrap_or(u64::MAX)
 }
 
 impl Estimate {
@@ -430,7 +438,7 @@ mod tests {
         // pair once, plus the diagonal.
         let lower: u64 = {
             let mut per_body = vec![0u64; s.bodies.len()];
-            for l in &s.links {
+            for l in s.links.iter() {
                 per_body[l.a] += 1;
                 per_body[l.b] += 1;
             }

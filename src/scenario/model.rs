@@ -735,10 +735,11 @@ pub struct Scenario {
     pub solver: Solver,
     /// Body model actually used (after resolving `auto`).
     pub body_model: BodyModel,
-    /// Bodies, in file order (grid: row by row).
-    pub bodies: Vec<BodySpec>,
-    /// Links, in file order (link k of the file is `links[k-1]`).
-    pub links: Vec<LinkSpec>,
+    /// Bodies, in file order (grid: row by row). Shared, not copied, by the world and
+    /// the systems that use them whole (a monolithic run's node): the model is held once.
+    pub bodies: std::sync::Arc<[BodySpec]>,
+    /// Links, in file order (link k of the file is `links[k-1]`); shared as the bodies.
+    pub links: std::sync::Arc<[LinkSpec]>,
     /// External forces and torques.
     pub forces: Vec<ForceSpec>,
     /// Uniform gravity [m/s²] acting on every movable body; `None` = none (the thesis

@@ -582,7 +582,8 @@ fn run_point(out: &Path, loaded: &Loaded, p: &Point, keep: Keep) -> Result<()> {
         skip_trace_files: keep == Keep::Summary,
         ..Default::default()
     };
-    match crate::progress::quietly(|| crate::run::run_with(&scenario, &dir, options)) {
+    let scenario = std::sync::Arc::new(scenario);
+    match crate::progress::quietly(|| crate::run::run_shared(scenario, &dir, options)) {
         Ok(_) | Err(Error::Diverged(_) | Error::Numerical { .. }) => {}
         Err(Error::Invalid { path, message }) => {
             return Err(Error::invalid(

@@ -88,6 +88,8 @@ fn analyse(
     row_idx: &[usize],
     layout: Layout,
 ) -> Option<SymbolicCholesky<usize>> {
+    #[cfg(test)]
+    ANALYSES.with(|c| c.set(c.get() + 1));
     let a = SymbolicSparseColMatRef::new_checked(n, n, col_ptr, None, row_idx);
     let params = CholeskySymbolicParams {
         supernodal_flop_ratio_threshold: if layout == Layout::BySize && n >= SUPERNODAL_MIN_LINKS {
@@ -101,14 +103,58 @@ fn analyse(
 }
 
 /// Entries of the factor of the lower triangle `(col_ptr, row_idx)` of an `n × n`
-/// pattern; `None` if faer refuses the pattern.
+/// pattern; `None` if faer refuses the pattern. The analysis is kept for the solver
+/// that will factorize this very pattern ([`ANALYSED`]).
 pub(super) fn factor_entries(
     n: usize,
     col_ptr: &[usize],
     row_idx: &[usize],
     layout: Layout,
 ) -> Option<u64> {
-    analyse(n, col_ptr, row_idx, layout).map(|s| s.len_val() as u64)
+    let symbolic = analyse(n, col_ptr, row_idx, layout)?;
+    let entries = symbolic.len_val() as u64;
+    if let Ok(mut kept) = ANALYSED.lock() {
+        *kept = Some((pattern_key(n, col_ptr, row_idx, layout), Arc::new(symbolic)));
+    }
+    Some(entries)
+}
+
+#[cfg(test)]
+thread_local! {
+    /// Analyses made on this thread (tests count them).
+    pub(super) static ANALYSES: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+}
+
+/// The last analysis [`factor_entries`] made, by the key of its pattern: a run's
+/// budget estimate analyses the scene's pattern to bound its factor, and the run's
+/// solver then takes that analysis instead of doing it again (4 s and a second AMD's
+/// workspace on a million-body grid). One entry, taken by the first solver of the same
+/// pattern; the analysis depends on the pattern only, so whoever takes it gets the same
+/// bits it would have computed.
+static ANALYSED: std::sync::Mutex<Option<(blake3::Hash, Arc<SymbolicCholesky<usize>>)>> =
+    std::sync::Mutex::new(None);
+
+/// What identifies an analysis: the pattern's size, columns and rows, and the layout.
+fn pattern_key(n: usize, col_ptr: &[usize], row_idx: &[usize], layout: Layout) -> blake3::Hash {
+    let mut h = blake3::Hasher::new();
+    h.update(&(n as u64).to_le_bytes());
+    h.update(&[u8::from(layout == Layout::Simplicial)]);
+    for &x in col_ptr.iter().chain(row_idx) {
+        h.update(&(x as u64).to_le_bytes());
+    }
+    h.finalize()
+}
+
+/// The analysis of this pattern if [`factor_entries`] kept it, taken out of the cache.
+fn take_analysed(key: blake3::Hash) -> Option<Arc<SymbolicCholesky<usize>>> {
+    let mut kept = ANALYSED.lock().ok()?;
+    match kept.take() {
+        Some((k, s)) if k == key => Some(s),
+        other => {
+            *kept = other;
+            None
+        }
+    }
 }
 
 impl Ordered {
@@ -121,7 +167,11 @@ impl Ordered {
         row_idx: &[usize],
         layout: Layout,
     ) -> Option<Ordered> {
-        Ordered::with(Arc::new(analyse(n, col_ptr, row_idx, layout)?))
+        let symbolic = match take_analysed(pattern_key(n, col_ptr, row_idx, layout)) {
+            Some(symbolic) => symbolic,
+            None => Arc::new(analyse(n, col_ptr, row_idx, layout)?),
+        };
+        Ordered::with(symbolic)
     }
 
     /// The factorization of an analysed pattern, with buffers of its own.
