@@ -434,6 +434,6 @@ pub fn study(
         fmt((l1 - l0).norm() / l0.norm())
     );
     write_markdown(out, &scenario.name, &reference, &cells)?;
-    write_plots(out, &scenario.name, &cells)?;
+    write_plots(out, &cells)?;
     Ok(cells)
 }

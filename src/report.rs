@@ -51,18 +51,27 @@ pub enum Scale {
 /// Size of every plot [px]: 960 × 540, a 16:9 frame that stays legible on a page.
 const SIZE: (u32, u32) = (960, 540);
 
+/// `text` with its first letter in capitals: a plot's title starts a sentence.
+pub fn capitalized(text: &str) -> String {
+    let mut chars = text.chars();
+    match chars.next() {
+        Some(first) => first.to_uppercase().chain(chars).collect(),
+        None => String::new(),
+    }
+}
+
 /// Font family of all text; the SVG viewer picks the actual face.
 const FONT: &str = "sans-serif";
 
 /// Font sizes as plotters takes them (the SVG gets them divided by 1.24) [px]: title,
 /// axis labels, tick labels, legend.
-const TITLE_PX: f64 = 24.0;
+const TITLE_PX: f64 = 26.0;
 /// See [`TITLE_PX`].
-const DESC_PX: f64 = 17.0;
+const DESC_PX: f64 = 20.0;
 /// See [`TITLE_PX`].
-const TICK_PX: f64 = 15.0;
+const TICK_PX: f64 = 18.0;
 /// See [`TITLE_PX`].
-const LEGEND_PX: f64 = 15.0;
+const LEGEND_PX: f64 = 17.0;
 
 /// Series colours, in order: Tableau 10 plus black and indigo, all distinct on white.
 const PALETTE: [RGBColor; 12] = [

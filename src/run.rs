@@ -721,8 +721,7 @@ const SIGNAL_PANELS: usize = 12;
 const WORST_LINKS: usize = 4;
 
 fn write_plots(out: &Path, world: &CoSim, rec: &Recorder) -> Result<()> {
-    let name = &world.scenario().name;
-    let title = |what: &str| format!("{name} — {what}");
+    let title = |what: &str| crate::report::capitalized(what);
     let time = "time t [s]";
     // Up to 6 links one line each; more as their envelope plus the worst few.
     let links = rec.constraint_series();
@@ -914,9 +913,14 @@ mod tests {
     fn link_names(svg: &str) -> Vec<(i32, String)> {
         texts(svg)
             .into_iter()
-            .map(|t| match t.2.split_once(" (dashed, lies on ") {
-                Some((name, _)) => (t.0, t.1, name.to_string()),
-                None => t,
+            // An entry's first row starts with its name (`L2 (dashed, lies on L1)` may
+            // wrap after it).
+            .map(|t| {
+                (
+                    t.0,
+                    t.1,
+                    t.2.split(' ').next().unwrap_or_default().to_string(),
+                )
             })
             .filter(|t| t.2.len() > 1 && t.2.starts_with('L'))
             .filter(|t| t.2[1..].chars().all(|c| c.is_ascii_digit()))
@@ -929,8 +933,9 @@ mod tests {
         let (svg, bodies, trace) = grid_run(4, 4);
         let texts = texts(&svg);
         let has = |s: &str| texts.iter().any(|t| t.2 == s);
-        assert!(has("plots_grid4x4 — constraint values of 24 links"));
-        assert!(has("RMS of 24 links, band min–max"));
+        assert!(has("Constraint values of 24 links"));
+        // The legend entry wraps after "band" in its panel.
+        assert!(has("RMS of 24 links, band") && has("min–max"));
         assert!(has("time t [s]") && has("constraint value w [m]"));
         assert!(!texts.iter().any(|t| t.2.contains("more")), "nothing cut");
         // The 4 links of largest max |w| in the trace, largest first.
@@ -955,7 +960,12 @@ mod tests {
         let right = rightmost_data_x(&bodies);
         let entries: Vec<(i32, i32, String)> = crate::report::tests_support::texts(&bodies)
             .into_iter()
-            .filter(|t| t.2.contains(" of B"))
+            // An entry's first row (a long one wraps: `y of B1 (dashed, lies` / `on x …`).
+            .filter(|t| {
+                ["x of B", "y of B", "z of B"]
+                    .iter()
+                    .any(|p| t.2.starts_with(p))
+            })
             .collect();
         assert!(!entries.is_empty() && entries.len() <= 6, "{entries:?}");
         assert!(

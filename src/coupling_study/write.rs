@@ -5,7 +5,7 @@ use std::path::Path;
 use super::{Cell, DISTRIBUTIONS, SCHEMES};
 use crate::error::{Error, Result};
 use crate::output::write_atomic;
-use crate::report::{write_line_plot, LinePlot, Scale, Series};
+use crate::report::{capitalized, write_line_plot, LinePlot, Scale, Series};
 
 /// Wall time per step of `cell` relative to `reset` at the same τ and distribution.
 fn cost_ratio(cells: &[Cell], cell: &Cell) -> f64 {
@@ -188,12 +188,12 @@ fn scheme_series(cells: &[Cell], value: &dyn Fn(&Cell) -> f64) -> Vec<Series> {
     all
 }
 
-pub(super) fn write_plots(out: &Path, name: &str, cells: &[Cell]) -> Result<()> {
+pub(super) fn write_plots(out: &Path, cells: &[Cell]) -> Result<()> {
     let series = |value: &dyn Fn(&Cell) -> f64| scheme_series(cells, value);
     // Every plot: delay on a log axis, bounded cells only (a diverged one is a gap in
     // its line), one line per scheme.
     let plot = |file: &str, what: &str, y_label: &str, y_scale: Scale, series: &[Series]| {
-        let title = format!("{name} — {what} vs delay (bounded runs only)");
+        let title = format!("{} vs delay (bounded runs only)", capitalized(what));
         write_line_plot(
             &out.join(file),
             &LinePlot {

@@ -16,7 +16,7 @@ const GAP: i32 = 8;
 /// Space left and right of the entries inside the panel [px].
 const PAD: i32 = 16;
 /// Narrowest and widest legend panel [px].
-const WIDTH: (u32, u32) = (120, 300);
+const WIDTH: (u32, u32) = (110, 230);
 
 /// What is drawn before an entry's text.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -130,7 +130,6 @@ pub(super) fn write_plots(out: &Path, world: &CoSim, exp: &Experiment) -> Result
     if exp.windows.is_empty() {
         return Ok(());
     }
-    let name = &world.scenario().name;
     let live = spec.method.name();
     let cost_label = match spec.problem {
         Problem::Constrained { .. } => "cost C [m]",
@@ -160,7 +159,7 @@ pub(super) fn write_plots(out: &Path, world: &CoSim, exp: &Experiment) -> Result
     write_line_plot(
         &out.join("cost_methods.svg"),
         &LinePlot {
-            title: &format!("{name} — cost per window by method (black: the live one)"),
+            title: &String::from("Cost per window by method (black: the live one)"),
             x_label: "time t [s]",
             y_label: cost_label,
             series: &series,
@@ -189,7 +188,7 @@ pub(super) fn write_plots(out: &Path, world: &CoSim, exp: &Experiment) -> Result
     write_line_plot(
         &out.join("delays_optimum.svg"),
         &LinePlot {
-            title: &format!("{name} — controlled delays and the grid optimum"),
+            title: &String::from("Controlled delays and the grid optimum"),
             x_label: "time t [s]",
             y_label: "delay τ [ms]",
             series: &delays,
@@ -199,7 +198,7 @@ pub(super) fn write_plots(out: &Path, world: &CoSim, exp: &Experiment) -> Result
             markers: false,
         },
     )?;
-    write_surface(out, world, exp, &names)
+    write_surface(out, exp, &names)
 }
 
 /// The cells of a heatmap over two-delay points: the distinct first and second delays
@@ -223,11 +222,10 @@ pub(super) fn cells_ms(points: &[Candidate]) -> (Vec<f64>, Vec<f64>, Vec<Vec<f64
     (ms(xs), ms(ys), values)
 }
 
-fn write_surface(out: &Path, world: &CoSim, exp: &Experiment, names: &[String]) -> Result<()> {
+fn write_surface(out: &Path, exp: &Experiment, names: &[String]) -> Result<()> {
     let Some((t, grid)) = &exp.surface else {
         return Ok(());
     };
-    let name = &world.scenario().name;
     let window = exp.windows.iter().find(|w| w.t_start == *t);
     // The points themselves, for the numbers the plot only shows: the grid, then the
     // DSM's candidates of the window in the order it measured them.
@@ -257,7 +255,7 @@ fn write_surface(out: &Path, world: &CoSim, exp: &Experiment, names: &[String]) 
         .unwrap_or_default();
     let t0 = t.as_secs_f64();
     let t1 = window.map_or(t0, |w| w.t_end.as_secs_f64());
-    let title = format!("{name} — cost surface over [{t0}, {t1}) s with the DSM path");
+    let title = format!("Cost surface over [{t0}, {t1}) s with the DSM path");
     if names.len() == 1 {
         let curve = Series::new(
             "grid search",

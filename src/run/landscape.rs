@@ -93,10 +93,7 @@ pub(super) fn write(out: &Path, world: &CoSim, exp: &Experiment) -> Result<()> {
         .unwrap_or_default();
     let t0 = t.as_secs_f64();
     let t1 = window.map_or(t0, |w| w.t_end.as_secs_f64());
-    let title = format!(
-        "{} — window cost over [{t0}, {t1}) s",
-        world.scenario().name
-    );
+    let title = format!("Window cost over [{t0}, {t1}) s");
     write_heatmap(
         &out.join("landscape.svg"),
         &Heatmap {

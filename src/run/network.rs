@@ -75,7 +75,6 @@ pub(super) fn write_plots(out: &Path, world: &CoSim, rec: &Recorder) -> Result<(
     let (Some(link), Some(log)) = (world.tdma(), rec.network()) else {
         return Ok(());
     };
-    let name = &world.scenario().name;
     let names: Vec<String> = world
         .channels()
         .iter()
@@ -85,7 +84,7 @@ pub(super) fn write_plots(out: &Path, world: &CoSim, rec: &Recorder) -> Result<(
     if !cycles.is_empty() {
         let first = cycles[0].cycle;
         let title = format!(
-            "{name} — TDMA slot timeline, cycles {first}–{}",
+            "TDMA slot timeline, cycles {first}–{}",
             first + cycles.len() as u64 - 1
         );
         write_slot_timeline(
@@ -110,7 +109,7 @@ pub(super) fn write_plots(out: &Path, world: &CoSim, rec: &Recorder) -> Result<(
     write_line_plot(
         &out.join("list_lag.svg"),
         &LinePlot {
-            title: &format!("{name} — slot-list switch lag (decision → in force)"),
+            title: &String::from("Slot-list switch lag (decision → in force)"),
             x_label: "decision time t [s]",
             y_label: "lag [ms]",
             series: &[Series::new("list switch lag", points)],

@@ -285,7 +285,7 @@ fn cost_vs(out: &Path, plan: &Plan, records: &[Record], metric: &Metric) -> Resu
         ));
     }
     let name = &plan.axes[xa].name;
-    let mut title = format!("{} — {} vs {name}", plan.name, metric.what);
+    let mut title = format!("{} vs {name}", crate::report::capitalized(metric.what));
     if averaged {
         let mut over: Vec<&str> = draws.iter().map(|&k| plan.axes[k].name.as_str()).collect();
         if plan.repeat > 1 {
@@ -366,7 +366,7 @@ fn heatmap(out: &Path, plan: &Plan, records: &[Record]) -> Result<()> {
                 .collect()
         })
         .collect();
-    let mut title = format!("{} — mean cost", plan.name);
+    let mut title = String::from("Mean cost");
     if shared {
         let mut rest: Vec<&str> = plan.axes[2..].iter().map(|a| a.name.as_str()).collect();
         if plan.repeat > 1 {

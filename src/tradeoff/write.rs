@@ -289,8 +289,7 @@ const Y_LABEL: &str = "max body-position error vs RK4 reference [m]";
 fn plots(out: &Path, study: &Study) -> Result<()> {
     let series = knob_series(study);
     let title = format!(
-        "{} — work-precision over {} s (one knob at a time)",
-        study.name,
+        "Work-precision over {} s (one knob at a time)",
         study.horizon.as_secs_f64()
     );
     write_line_plot(
@@ -298,7 +297,7 @@ fn plots(out: &Path, study: &Study) -> Result<()> {
         &work_precision_plot(&series, &title),
     )?;
     let pareto = pareto_series(study);
-    let title = format!("{} — Pareto front of wall time and error", study.name);
+    let title = String::from("Pareto front of wall time and error");
     write_line_plot(
         &out.join("pareto.svg"),
         &LinePlot {
