@@ -536,7 +536,7 @@ fn diverged_points_are_flagged_and_kept_out_of_the_means() {
     assert!(at[2].is_empty());
     assert!(column(&csv, "diverged_node")[0].parse::<u64>().unwrap() >= 1);
     assert!(column(&csv, "diverged_where")[0].starts_with('L'));
-    let svg = read(&out.join("cost_vs_bound.svg"));
+    let svg = svg_text(&read(&out.join("cost_vs_bound.svg")));
     assert!(
         svg.contains("diverged: 2 of 4 points"),
         "legend counts them"
@@ -643,7 +643,7 @@ fn the_line_plot_averages_over_seed_axes_and_names_values_by_their_labels() {
     let path = write_sweep(&dir, "lab.json", &sweep);
     let out = dir.join("out");
     ok(&[&"sweep", &path, &"--out", &out]);
-    let svg = read(&out.join("cost_vs_tau1.svg"));
+    let svg = svg_text(&read(&out.join("cost_vs_tau1.svg")));
     assert!(
         svg.contains("mean over draw"),
         "the title names the averaged axis"
@@ -872,4 +872,14 @@ mod hostile {
                 }
             }        }
     }
+}
+
+/// The text of an SVG plot, its rows joined by spaces: a legend entry that wraps onto a
+/// second row reads as one.
+fn svg_text(svg: &str) -> String {
+    svg.lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !l.starts_with('<'))
+        .collect::<Vec<_>>()
+        .join(" ")
 }
