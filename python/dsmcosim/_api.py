@@ -92,7 +92,7 @@ Progress = Union[bool, Callable[[int, int, str], Any], None]
 def _in_notebook() -> bool:
     """Whether the caller runs in a Jupyter kernel."""
     try:
-        from IPython import get_ipython  # type: ignore[import-not-found]
+        from IPython import get_ipython  # type: ignore[import-not-found, unused-ignore]
     except ImportError:
         return False
     shell = get_ipython()
@@ -103,14 +103,14 @@ def _tqdm() -> Any:
     """tqdm's bar class: a widget in a notebook that has ipywidgets, text elsewhere (a
     notebook without ipywidgets gets the text bar, not tqdm's warning)."""
     try:
-        import tqdm  # type: ignore[import-untyped]
+        import tqdm  # type: ignore[import-untyped, unused-ignore]
     except ImportError as e:
         raise ImportError("progress=True draws tqdm bars: `pip install tqdm` "
                           "(or pass a callable progress(position, total, unit))") from e
     if _in_notebook():
         try:
-            import ipywidgets  # type: ignore[import-not-found]  # noqa: F401
-            from tqdm.notebook import tqdm as widget  # type: ignore[import-untyped]
+            import ipywidgets  # type: ignore[import-not-found, unused-ignore]  # noqa: F401
+            from tqdm.notebook import tqdm as widget  # type: ignore[import-untyped, unused-ignore]
             return widget
         except ImportError:
             pass
