@@ -401,8 +401,8 @@ def test_a_sweep_on_a_local_dask_cluster_writes_the_command_lines_table(tmp_path
 
 
 def test_a_sweep_on_a_ray_pool_writes_the_command_lines_table(tmp_path):
-    pytest.importorskip("ray")
-    from ray.util.multiprocessing import Pool
+    # The module itself: a bare `ray` may be a leftover session directory on the path.
+    Pool = pytest.importorskip("ray.util.multiprocessing").Pool
     sweep, cli = small_sweep(tmp_path)
     pool = Pool(processes=2, ray_address="local")
     try:
