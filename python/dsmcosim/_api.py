@@ -218,7 +218,7 @@ class Run:
         self.directory: Path = directory
         self._tables: Dict[str, Optional[pd.DataFrame]] = {}
         if not keep:
-            self._cleanup = weakref.finalize(self, shutil.rmtree, os.fspath(directory), True)
+            weakref.finalize(self, shutil.rmtree, os.fspath(directory), True)
 
     def table(self, name: str, columns: Optional[Sequence[str]] = None) -> Optional[pd.DataFrame]:
         """Table `name` ("trace", "epochs" or "network") read from its file, only

@@ -335,13 +335,7 @@ fn sweep(
     resume: bool,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<()> {
-    let keep = keep_of(keep).map_err(|e| py_error(py, e))?;
-    let options = dsmcosim::sweep::Options {
-        keep,
-        resume,
-        shard: None,
-        sets,
-    };
+    let options = sweep_options(keep, resume, sets).map_err(|e| py_error(py, e))?;
     let reporter = Reporter::new(progress);
     let listener = reporter.listener.clone();
     let stopped = reporter.stopped.clone();
@@ -383,6 +377,21 @@ fn keep_of(keep: &str) -> dsmcosim::Result<dsmcosim::sweep::Keep> {
     }
 }
 
+/// The options of a sweep run from Python: no shard (an executor's points are its
+/// shards), `keep` named as the command line names it.
+fn sweep_options(
+    keep: &str,
+    resume: bool,
+    sets: Vec<String>,
+) -> dsmcosim::Result<dsmcosim::sweep::Options> {
+    Ok(dsmcosim::sweep::Options {
+        keep: keep_of(keep)?,
+        resume,
+        shard: None,
+        sets,
+    })
+}
+
 /// A sweep on the caller's executor, first call: sets `out` up as `dsmcosim sweep`
 /// does and returns the keys of the points to run (without those a `resume` finds
 /// done), in index order.
@@ -395,15 +404,8 @@ fn sweep_pending(
     keep: &str,
     resume: bool,
 ) -> PyResult<Vec<String>> {
-    let result = py.detach(|| {
-        let options = dsmcosim::sweep::Options {
-            keep: keep_of(keep)?,
-            resume,
-            shard: None,
-            sets,
-        };
-        dsmcosim::sweep::pending(&path, &out, &options)
-    });
+    let result =
+        py.detach(|| dsmcosim::sweep::pending(&path, &out, &sweep_options(keep, resume, sets)?));
     result.map_err(|e| py_error(py, e))
 }
 
@@ -439,12 +441,7 @@ fn sweep_finish(
     ran: usize,
 ) -> PyResult<()> {
     let result = py.detach(|| {
-        let options = dsmcosim::sweep::Options {
-            keep: keep_of(keep)?,
-            resume: true,
-            shard: None,
-            sets,
-        };
+        let options = sweep_options(keep, true, sets)?;
         dsmcosim::sweep::finish(&path, &out, &options, ran).map(|_| ())
     });
     result.map_err(|e| py_error(py, e))
@@ -810,22 +807,9 @@ impl PyCoSim {
             .detach(|| self.world.observe())
             .map_err(|e| py_error(py, e))?;
         let scenario = self.world.scenario();
-        let joints = scenario.links.iter().any(|l| l.joint.is_some());
+        // trace.csv's names: `L<k>`, or a joint's row `J<j>_<r>`.
         let rows: Vec<String> = (0..seen.w.len())
-            .map(|k| match scenario.links.get(k) {
-                Some(l) if joints => l.name(k),
-                _ => dsmcosim::scenario::model::row_name(k, None),
-            })
-            .collect();
-        let signal_names: Vec<String> = scenario
-            .fmus
-            .iter()
-            .flat_map(|f| {
-                f.outputs
-                    .iter()
-                    .filter(|v| v.traced)
-                    .map(move |v| format!("{}.{}", f.name, v.name))
-            })
+            .map(|k| scenario.links[k].name(k))
             .collect();
         let xyz = |vs: &[nalgebra::Vector3<f64>]| -> Vec<[f64; 3]> {
             vs.iter().map(|v| [v.x, v.y, v.z]).collect()
@@ -846,7 +830,7 @@ impl PyCoSim {
         out.set_item("f", seen.f)?;
         out.set_item("max_w", seen.max_w)?;
         let signals = PyDict::new(py);
-        for (name, value) in signal_names.into_iter().zip(seen.signals) {
+        for (name, value) in scenario.signal_names().into_iter().zip(seen.signals) {
             signals.set_item(name, value)?;
         }
         out.set_item("signals", signals)?;

@@ -774,6 +774,20 @@ pub struct Scenario {
 }
 
 impl Scenario {
+    /// The traced FMU outputs' names, `unit.variable`, FMU by FMU in scenario order: the
+    /// trace's signal columns and every value list that follows them.
+    pub fn signal_names(&self) -> Vec<String> {
+        self.fmus
+            .iter()
+            .flat_map(|f| {
+                f.outputs
+                    .iter()
+                    .filter(|v| v.traced)
+                    .map(move |v| format!("{}.{}", f.name, v.name))
+            })
+            .collect()
+    }
+
     /// Where constraint row `l` is (0-based, in the scenario's order: links, then
     /// joints' rows), as an error names it.
     pub fn place_of_row(&self, l: usize) -> Place {

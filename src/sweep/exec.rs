@@ -421,13 +421,7 @@ fn prepare(
     // it resumes.
     write_atomic(&out.join("sweep.json"), loaded.text.as_bytes())?;
     create_dir_all(&out.join("points"))?;
-    let selected: Vec<usize> = (0..loaded.points.len())
-        .filter(|&k| {
-            options
-                .shard
-                .is_none_or(|s| s.contains(loaded.points[k].index))
-        })
-        .collect();
+    let selected = selected(loaded, options.shard);
     let mut to_run = Vec::new();
     for &k in &selected {
         let p = &loaded.points[k];
@@ -458,6 +452,13 @@ fn prepare(
         to_run.push(k);
     }
     Ok((selected, to_run, lock))
+}
+
+/// The indices of the points `shard` runs (all of them without one).
+fn selected(loaded: &Loaded, shard: Option<Shard>) -> Vec<usize> {
+    (0..loaded.points.len())
+        .filter(|&k| shard.is_none_or(|s| s.contains(loaded.points[k].index)))
+        .collect()
 }
 
 /// Writes the sweep's tables and figures from the `done.json` of the `selected` points
@@ -534,13 +535,7 @@ pub fn run_one(
 pub fn finish(sweep_path: &Path, out: &Path, options: &Options, ran: usize) -> Result<Report> {
     let loaded = load(sweep_path, &options.sets)?;
     let _lock = crate::output::run_dir::lock(out, SWEEP_LOCK, "dsmcosim sweep")?;
-    let selected: Vec<usize> = (0..loaded.points.len())
-        .filter(|&k| {
-            options
-                .shard
-                .is_none_or(|s| s.contains(loaded.points[k].index))
-        })
-        .collect();
+    let selected = selected(&loaded, options.shard);
     complete(out, &loaded, &selected, ran)
 }
 

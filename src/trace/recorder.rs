@@ -149,16 +149,7 @@ impl Recorder {
         r.invariants = InvariantLog::new(&undriven_stretches(scenario));
         r.layer = LayerWatch::new(scenario);
         r.joint_work = JointWork::new(scenario);
-        r.signal_names = scenario
-            .fmus
-            .iter()
-            .flat_map(|f| {
-                f.outputs
-                    .iter()
-                    .filter(|v| v.traced)
-                    .map(move |v| format!("{}.{}", f.name, v.name))
-            })
-            .collect();
+        r.signal_names = scenario.signal_names();
         r.signal_plots = PlotSamples::new(0, r.signal_names.len());
         if let Some(f) = file {
             r.start_file(f, &ids)?;
