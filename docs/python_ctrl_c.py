@@ -5,7 +5,8 @@
 For each of `run`, `CoSim.advance` and `sweep` on scenarios/grid64_tight.json (4096
 bodies, minutes of work), a child process starts the call, gets SIGINT three seconds
 in, and the time from the signal to the child's exit is printed with what the child
-saw (KeyboardInterrupt, the run's status, where the co-simulation stopped)."""
+saw (KeyboardInterrupt, the run's status, where the co-simulation stopped). Last, a
+`run` on a pseudo-terminal gets Ctrl-C typed into it, as at a shell."""
 
 import json
 import signal
@@ -50,3 +51,40 @@ for name, body in CALLS.items():
         child.send_signal(signal.SIGINT)
         said = child.communicate(timeout=600)[0].strip()
         print(f"{name}: exited {time.monotonic() - sent:.2f} s after SIGINT: {said}")
+
+# The same through a terminal: `run` in a child on a pseudo-terminal, and Ctrl-C typed
+# into it (byte 0x03, which the terminal's line discipline turns into SIGINT for the
+# foreground process), as a user at a shell would.
+import os
+import pty
+import select
+
+pid, fd = pty.fork()
+if pid == 0:
+    os.execv(sys.executable, [sys.executable, "-c", textwrap.dedent("""
+        import dsmcosim, json, tempfile
+        out = tempfile.mkdtemp() + "/out"
+        print("ready", flush=True)
+        try:
+            dsmcosim.run("scenarios/grid64_tight.json", out)
+        except KeyboardInterrupt:
+            print("KeyboardInterrupt, status", json.load(open(out + "/summary.json"))["status"])
+    """)])
+seen = b""
+while b"ready" not in seen:
+    seen += os.read(fd, 1024)
+time.sleep(3)
+typed = time.monotonic()
+os.write(fd, b"\x03")
+said = b""
+while select.select([fd], [], [], 600)[0]:
+    try:
+        chunk = os.read(fd, 4096)
+    except OSError:  # the child closed the terminal
+        break
+    if not chunk:
+        break
+    said += chunk
+os.waitpid(pid, 0)
+text = said.decode(errors="replace").replace("^C", "").strip()
+print(f"run on a terminal: exited {time.monotonic() - typed:.2f} s after Ctrl-C: {text}")
