@@ -5,8 +5,9 @@
 //! method's windows set against a mean over another's (a baseline is `NaN` in a window
 //! where its choice was infeasible) then compares the windows as much as the methods.
 //! Every comparison here is over the windows where both were measured: per window the
-//! difference `a − b`, its mean with a 95 % confidence interval (paired t), and the
-//! windows `a` won, with a two-sided sign test.
+//! difference `a − b`; the windows `a` won and lost, with the two-sided exact sign test
+//! (ties left out), which gives the verdict; and beside it the mean difference with its
+//! 95 % confidence interval (paired t), a secondary reading of the size of the effect.
 
 use statrs::distribution::{ContinuousCDF, StudentsT};
 
@@ -38,15 +39,21 @@ pub struct Paired {
     pub sign_test_p: f64,
 }
 
-/// What a paired comparison says.
+/// Level of the sign test behind [`Paired::verdict`]: two-sided, 5 %, for one
+/// comparison on its own (a table of many comparisons corrects for their number itself,
+/// as results/summarize_claims.py does with Holm–Bonferroni; method §5).
+pub const SIGN_TEST_LEVEL: f64 = 0.05;
+
+/// What a paired comparison says, by the sign test (method §5, the primary test).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Verdict {
-    /// The interval lies below zero: `a` is lower.
+    /// The sign test's p is below [`SIGN_TEST_LEVEL`] and `a` won more windows.
     Better,
-    /// The interval lies above zero: `a` is higher.
+    /// The sign test's p is below [`SIGN_TEST_LEVEL`] and `a` lost more windows.
     Worse,
-    /// The interval contains zero (or fewer than 2 windows).
+    /// The sign test's p is at or above [`SIGN_TEST_LEVEL`] (always so below 6 windows
+    /// that are not ties).
     NotSignificant,
 }
 
@@ -101,12 +108,16 @@ impl Paired {
         }
     }
 
-    /// Better, worse or not significantly different at 95 %.
+    /// Better, worse or not significantly different by the two-sided exact sign test at
+    /// [`SIGN_TEST_LEVEL`], uncorrected: this comparison taken alone. The t interval
+    /// (`ci95`) is shown beside it and does not enter the verdict.
     pub fn verdict(&self) -> Verdict {
-        match self.ci95 {
-            Some([_, hi]) if hi < 0.0 => Verdict::Better,
-            Some([lo, _]) if lo > 0.0 => Verdict::Worse,
-            _ => Verdict::NotSignificant,
+        if self.sign_test_p >= SIGN_TEST_LEVEL || self.wins == self.losses {
+            Verdict::NotSignificant
+        } else if self.wins > self.losses {
+            Verdict::Better
+        } else {
+            Verdict::Worse
         }
     }
 }
@@ -146,12 +157,31 @@ mod tests {
         let [lo, hi] = p.ci95.expect("3 windows");
         assert!((lo - (-2.0 - 2.484138)).abs() < 1e-5, "{lo}");
         assert!((hi - (-2.0 + 2.484138)).abs() < 1e-5, "{hi}");
-        assert_eq!(p.verdict(), Verdict::NotSignificant);
-        // Twenty windows each 1 ± 0.1 lower: significant, and the other way round.
+    }
+
+    #[test]
+    fn the_verdict_is_the_sign_tests_not_the_intervals() {
+        // Twenty windows each 1 lower: 20 of 20, p = 2^−19, better; and the other way.
         let a: Vec<f64> = (0..20).map(|i| 10.0 + 0.1 * (i % 3) as f64).collect();
         let b: Vec<f64> = a.iter().map(|x| x + 1.0).collect();
         assert_eq!(Paired::new(&a, &b).verdict(), Verdict::Better);
         assert_eq!(Paired::new(&b, &a).verdict(), Verdict::Worse);
+        // 3 of 3 lower: the interval excludes zero, but p = 0.25: not significant.
+        let p = Paired::new(&[1.0, 1.0, 1.0], &[2.0, 2.1, 2.2]);
+        assert!(p.ci95.expect("3 windows")[1] < 0.0);
+        assert_eq!(p.verdict(), Verdict::NotSignificant);
+        // 15 windows won by 0.01, 5 lost by 1: the interval says worse (mean +0.2425),
+        // the sign test (15 of 20, p = 0.041) says better.
+        let a: Vec<f64> = (0..20).map(|i| if i < 15 { 0.99 } else { 2.0 }).collect();
+        let p = Paired::new(&a, &[1.0; 20]);
+        assert!(p.ci95.expect("20 windows")[0] > 0.0, "{:?}", p.ci95);
+        assert!((p.sign_test_p - 0.041389).abs() < 1e-5, "{}", p.sign_test_p);
+        assert_eq!(p.verdict(), Verdict::Better);
+        // Ties leave the test: 6 of 6 won and 14 ties is p = 0.03125, better.
+        let a: Vec<f64> = (0..20).map(|i| if i < 6 { 0.5 } else { 1.0 }).collect();
+        let p = Paired::new(&a, &[1.0; 20]);
+        assert_eq!((p.wins, p.losses, p.n), (6, 0, 20));
+        assert_eq!(p.verdict(), Verdict::Better);
     }
 
     #[test]

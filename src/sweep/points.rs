@@ -10,8 +10,8 @@ use super::pointer::Pointer;
 use crate::error::{Error, Result};
 
 /// `sweep.csv`'s fixed columns, in the groups it writes them ([`super::table`]): before
-/// the axes; after them (and `rep`); after `mean_cost_<method>`; last. With `rep` and
-/// the `mean_cost_`, `paired_` and `tau_` prefixes they are the names an axis may
+/// the axes; after them (and `rep`); after `unpaired_mean_cost_<method>`; last. With `rep` and
+/// the `unpaired_mean_cost_`, `paired_` and `tau_` prefixes they are the names an axis may
 /// not take.
 pub const LEADING_COLUMNS: [&str; 2] = ["index", "point"];
 /// See [`LEADING_COLUMNS`].
@@ -27,7 +27,8 @@ pub const STATUS_COLUMNS: [&str; 6] = [
 pub const LOSS_COLUMN: &str = "lost_frames";
 /// The columns of each paired comparison, `paired_<column>_<baseline>`, in order
 /// (summary.json → `paired`, method §5): ratio of the means, windows, wins, losses,
-/// mean difference, the 95 % interval's ends, the sign test's p and the verdict.
+/// mean difference, the 95 % paired-t interval's ends (secondary), the sign test's p
+/// and the verdict by that sign test (5 %, uncorrected).
 pub const PAIRED_COLUMNS: [&str; 9] = [
     "ratio", "n", "wins", "losses", "diff", "ci_low", "ci_high", "p", "verdict",
 ];
@@ -42,7 +43,7 @@ fn reserved(name: &str) -> bool {
         .chain(&TRAILING_COLUMNS)
         .chain(&["rep", LOSS_COLUMN])
         .any(|&c| c == name)
-        || name.starts_with("mean_cost_")
+        || name.starts_with("unpaired_mean_cost_")
         || name.starts_with("paired_")
         || name.starts_with("tau_")
 }
