@@ -74,7 +74,7 @@ def load_sweep(sweep_dir):
     axes = cols[cols.index("point") + 1 : end]
     numeric = ["index", "seed", "diverged_at", "diverged_node", "mean_cost", "lost_frames",
                "bandwidth"]
-    numeric += [c for c in cols if c.startswith(("tau_", "mean_cost_"))]
+    numeric += [c for c in cols if c.startswith(("tau_", "unpaired_mean_cost_"))]
     require_numeric(sweep, numeric, "sweep.csv")
     require_no_json(sweep, "sweep.csv")
     return sweep, axes

@@ -21,7 +21,7 @@ for n in names:
         print(f"{n}: not found"); continue
     s = json.load(open(os.path.join(d, "summary.json")))
     rows = list(csv.DictReader(open(os.path.join(d, "epochs.csv"))))
-    costs = {k[len("mean_cost_"):]: v for k, v in s.items() if k.startswith("mean_cost_")}
+    costs = {k[len("unpaired_mean_cost_"):]: v for k, v in s.items() if k.startswith("unpaired_mean_cost_")}
     order = sorted(costs, key=costs.get)
     print(f"== {n} ({s['status']}, {s['controller']['problem']['kind']}, D_s = {s['controller']['dsm_size']}, "
           f"T = {float(rows[0]['t_end']) - float(rows[0]['t_start']):g} s)")

@@ -99,6 +99,12 @@ pub struct RunOptions {
     /// Write no trace.csv and network.csv (a sweep point with `--keep summary`): the
     /// digests are the same, `trace_digest` is absent.
     pub skip_trace_files: bool,
+    /// BLAKE3 of the scenario's text as the run keeps it (`scenario.json`: the file's
+    /// bytes as read, or with `--set` the overridden text), which summary.json records
+    /// as `provenance.scenario_blake3`: byte-identical files give the same hash. `None`
+    /// (a scenario built in memory, a resumed checkpoint): the hash of the validated
+    /// model as JSON instead.
+    pub scenario_blake3: Option<[u8; 32]>,
 }
 
 /// Runs `scenario` and writes its outputs into `out`.
@@ -192,6 +198,12 @@ pub fn run_keeping_scenario(
     out: &Path,
     options: RunOptions,
 ) -> Result<Outcome> {
+    let options = RunOptions {
+        scenario_blake3: options
+            .scenario_blake3
+            .or_else(|| Some(*blake3::hash(text.as_bytes()).as_bytes())),
+        ..options
+    };
     let result = run_shared(Arc::new(scenario), out, options);
     if result.is_ok()
         || matches!(
@@ -315,6 +327,7 @@ fn finish(
         outcome: &outcome,
         failure: result.as_ref().err(),
         experiment: &experiment,
+        scenario_blake3: options.scenario_blake3,
     };
     write_summary(out, &run)?;
     write_plots(out, &world, &recorder)?;
@@ -519,6 +532,8 @@ struct Ran<'a> {
     outcome: &'a Outcome,
     failure: Option<&'a Error>,
     experiment: &'a Experiment,
+    /// [`RunOptions::scenario_blake3`].
+    scenario_blake3: Option<[u8; 32]>,
 }
 
 fn write_summary(out: &Path, run: &Ran) -> Result<()> {
@@ -528,6 +543,7 @@ fn write_summary(out: &Path, run: &Ran) -> Result<()> {
         outcome,
         failure,
         experiment: exp,
+        scenario_blake3,
     } = *run;
     let scenario = world.scenario();
     let error = failure.map(ToString::to_string);
@@ -567,7 +583,7 @@ fn write_summary(out: &Path, run: &Ran) -> Result<()> {
         .collect();
     let summary = json!({
         "scenario": scenario.name,
-        "provenance": provenance(scenario),
+        "provenance": provenance(scenario, scenario_blake3),
         "seed": scenario.seed,
         // `diverged` for what the simulation did (a divergence, a numerical failure);
         // `failed` for what stopped it from outside (an unwritable checkpoint).
@@ -665,10 +681,27 @@ fn write_summary(out: &Path, run: &Ran) -> Result<()> {
 
 /// Who computed the run and from what: the tool's version, the git commit it was built
 /// from (null outside a checkout; `-dirty` when tracked files differed), the compiler,
-/// and BLAKE3 of the scenario as run (the validated model with every default applied,
-/// serialized as JSON), so two summaries with the same hash ran the same scenario.
-fn provenance(scenario: &Scenario) -> serde_json::Value {
+/// and BLAKE3 of the scenario: of its text as the run keeps it (`text_blake3`, the
+/// file's bytes as read, [`RunOptions::scenario_blake3`]), so that byte-identical files
+/// give the same hash; without a text (a scenario built in memory, a resumed
+/// checkpoint), of the validated model with every default applied, serialized as JSON.
+fn provenance(scenario: &Scenario, text_blake3: Option<[u8; 32]>) -> serde_json::Value {
     let non_empty = |s: &'static str| (!s.is_empty()).then_some(s);
+    let hash = match text_blake3 {
+        Some(bytes) => blake3::Hash::from(bytes),
+        None => model_blake3(scenario),
+    };
+    json!({
+        "tool": "dsmcosim",
+        "version": env!("CARGO_PKG_VERSION"),
+        "git_commit": non_empty(env!("DSMCOSIM_GIT_COMMIT")),
+        "rustc": non_empty(env!("DSMCOSIM_RUSTC")),
+        "scenario_blake3": hash.to_hex().to_string(),
+    })
+}
+
+/// BLAKE3 of the validated model serialized as JSON.
+fn model_blake3(scenario: &Scenario) -> blake3::Hash {
     // Streamed into the hash: the JSON text of a million-body model is about 0.8 GB,
     // which a `to_vec` held on top of the whole world at the run's end (its peak).
     let mut hasher = blake3::Hasher::new();
@@ -680,13 +713,7 @@ fn provenance(scenario: &Scenario) -> serde_json::Value {
         // As `to_vec(..).unwrap_or_default()` did: the hash of nothing.
         hasher.reset();
     }
-    json!({
-        "tool": "dsmcosim",
-        "version": env!("CARGO_PKG_VERSION"),
-        "git_commit": non_empty(env!("DSMCOSIM_GIT_COMMIT")),
-        "rustc": non_empty(env!("DSMCOSIM_RUSTC")),
-        "scenario_blake3": hasher.finalize().to_hex().to_string(),
-    })
+    hasher.finalize()
 }
 
 fn plot(

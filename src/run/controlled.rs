@@ -67,7 +67,7 @@ pub(super) fn epoch_row(world: &CoSim, exp: &Experiment, i: usize) -> String {
     r
 }
 
-/// Adds the controller's settings and `mean_cost_<method>` keys to summary.json.
+/// Adds the controller's settings and `unpaired_mean_cost_<method>` keys to summary.json.
 pub(super) fn summarize(world: &CoSim, exp: &Experiment, summary: &mut Value) {
     let Some(spec) = spec(world) else { return };
     let live = spec.method.name();
@@ -93,7 +93,7 @@ pub(super) fn summarize(world: &CoSim, exp: &Experiment, summary: &mut Value) {
     names.extend(exp.baseline_names());
     for n in &names {
         if let Some(m) = exp.mean(n, live) {
-            summary[format!("mean_cost_{n}")] = json!(m);
+            summary[format!("unpaired_mean_cost_{n}")] = json!(m);
         }
     }
     // The live method against each baseline over the windows where both were measured

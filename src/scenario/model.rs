@@ -639,7 +639,7 @@ pub enum Method {
 }
 
 impl Method {
-    /// Name used in scenario files, summary keys (`mean_cost_<name>`) and epochs.csv.
+    /// Name used in scenario files, summary keys (`unpaired_mean_cost_<name>`) and epochs.csv.
     pub fn name(self) -> &'static str {
         match self {
             Method::Dsm => "dsm",

@@ -551,7 +551,7 @@ fn expected(p: &Point, base_digest: &str) -> Record {
             status: String::new(),
             divergence: None,
             mean_cost: None,
-            mean_cost_by_method: Default::default(),
+            unpaired_mean_cost_by_method: Default::default(),
             paired: Default::default(),
             live_method: None,
             lost_frames: 0,
@@ -575,6 +575,7 @@ fn run_point(out: &Path, loaded: &Loaded, p: &Point, keep: Keep) -> Result<()> {
     // removed.
     let options = crate::run::RunOptions {
         skip_trace_files: keep == Keep::Summary,
+        scenario_blake3: Some(*blake3::hash(p.text.as_bytes()).as_bytes()),
         ..Default::default()
     };
     let scenario = std::sync::Arc::new(scenario);

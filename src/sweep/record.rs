@@ -101,8 +101,9 @@ pub struct Row {
     pub divergence: Option<DivergenceRow>,
     /// Mean window cost [m].
     pub mean_cost: Option<f64>,
-    /// `mean_cost_<method>` of a controlled run, by method [m].
-    pub mean_cost_by_method: BTreeMap<String, Option<f64>>,
+    /// `unpaired_mean_cost_<method>` of a controlled run, by method [m]: each method's
+    /// mean over its own windows, not a comparison (that is `paired`).
+    pub unpaired_mean_cost_by_method: BTreeMap<String, Option<f64>>,
     /// A controlled run's live method against each baseline over the windows where
     /// both were measured (`summary.json`'s `paired`), by baseline. Empty for a run
     /// without a controller.
@@ -139,9 +140,14 @@ impl Row {
                 .map(str::to_string)
                 .ok_or_else(|| bad(&format!("not a run summary (no `{key}`)")))
         };
-        let mean_cost_by_method = obj
+        let unpaired_mean_cost_by_method = obj
             .iter()
-            .filter_map(|(k, v)| Some((k.strip_prefix("mean_cost_")?.to_string(), v.as_f64())))
+            .filter_map(|(k, v)| {
+                Some((
+                    k.strip_prefix("unpaired_mean_cost_")?.to_string(),
+                    v.as_f64(),
+                ))
+            })
             .collect();
         let paired = obj
             .get("paired")
@@ -203,7 +209,7 @@ impl Row {
             status: text("status")?,
             divergence,
             mean_cost: obj.get("mean_cost").and_then(Value::as_f64),
-            mean_cost_by_method,
+            unpaired_mean_cost_by_method,
             paired,
             live_method,
             lost_frames: obj.get("lost_frames").and_then(Value::as_u64).unwrap_or(0),
@@ -295,14 +301,14 @@ mod tests {
         assert_eq!(r.channels[0].tau_requested, Some(0.005));
         assert_eq!(r.channels[1].tau_achieved, Some(0.01));
         assert_eq!(r.bandwidth, Some(1.0 / 0.005 + 2.0 / 0.01));
-        assert!(r.mean_cost_by_method.is_empty());
+        assert!(r.unpaired_mean_cost_by_method.is_empty());
     }
 
     #[test]
     fn row_of_a_controlled_tdma_run() {
         let s = json!({
             "status": "diverged", "digest": "cd", "mean_cost": 1.5, "lost_frames": 3,
-            "mean_cost_dsm": 1.5, "mean_cost_grid": null, "bandwidth_mean": 400.0,
+            "unpaired_mean_cost_dsm": 1.5, "unpaired_mean_cost_grid": null, "bandwidth_mean": 400.0,
             "channels": [{"name": "c", "tau": 0.005, "tau_requested": 0.004, "tau_achieved": 0.0045}],
         });
         let r = Row::from_summary(&s, Path::new("summary.json")).unwrap();
@@ -311,7 +317,7 @@ mod tests {
         assert_eq!(r.bandwidth, Some(400.0));
         assert_eq!(r.channels[0].tau_requested, Some(0.004));
         assert_eq!(
-            r.mean_cost_by_method,
+            r.unpaired_mean_cost_by_method,
             BTreeMap::from([("dsm".to_string(), Some(1.5)), ("grid".to_string(), None)])
         );
     }

@@ -4,7 +4,7 @@
 //! per axis, `rep` (with `repeat` > 1), `seed`,
 //! `status`, `diverged_at` [s], `diverged_node`, `diverged_where` (the link `L14` or body
 //! `B3`; the three are empty for a point that finished), `mean_cost`,
-//! `mean_cost_<method>` for every method any record has (sorted), for every baseline
+//! `unpaired_mean_cost_<method>` for every method any record has (sorted), for every baseline
 //! any record compares with (sorted) the paired columns `paired_<c>_<baseline>`
 //! ([`super::points::PAIRED_COLUMNS`]), `lost_frames`,
 //! `tau_<name>_requested,tau_<name>_achieved` for every channel any record has (in order
@@ -40,7 +40,12 @@ fn num(x: Option<f64>) -> String {
 pub fn sweep_csv(plan: &Plan, records: &[Record]) -> String {
     let methods: BTreeSet<&str> = records
         .iter()
-        .flat_map(|r| r.row.mean_cost_by_method.keys().map(String::as_str))
+        .flat_map(|r| {
+            r.row
+                .unpaired_mean_cost_by_method
+                .keys()
+                .map(String::as_str)
+        })
         .collect();
     let paired: BTreeSet<&str> = records
         .iter()
@@ -60,7 +65,7 @@ pub fn sweep_csv(plan: &Plan, records: &[Record]) -> String {
         header.push("rep".into());
     }
     header.extend(STATUS_COLUMNS.map(String::from));
-    header.extend(methods.iter().map(|m| format!("mean_cost_{m}")));
+    header.extend(methods.iter().map(|m| format!("unpaired_mean_cost_{m}")));
     for m in &paired {
         header.extend(PAIRED_COLUMNS.map(|c| format!("paired_{c}_{m}")));
     }
@@ -92,7 +97,7 @@ pub fn sweep_csv(plan: &Plan, records: &[Record]) -> String {
         f.extend(
             methods
                 .iter()
-                .map(|m| num(row.mean_cost_by_method.get(*m).copied().flatten())),
+                .map(|m| num(row.unpaired_mean_cost_by_method.get(*m).copied().flatten())),
         );
         for m in &paired {
             let p = row.paired.get(*m).cloned().unwrap_or_default();
@@ -153,7 +158,7 @@ mod tests {
                 status: "ok".into(),
                 divergence: None,
                 mean_cost: Some(0.5),
-                mean_cost_by_method: methods
+                unpaired_mean_cost_by_method: methods
                     .iter()
                     .map(|&(m, c)| (m.to_string(), Some(c)))
                     .collect::<BTreeMap<_, _>>(),
@@ -199,7 +204,7 @@ mod tests {
             sweep_csv(&p, &rows),
             format!(
                 "index,point,slots,seed,status,diverged_at,diverged_node,diverged_where,mean_cost,\
-             mean_cost_dsm,mean_cost_grid,lost_frames,\
+             unpaired_mean_cost_dsm,unpaired_mean_cost_grid,lost_frames,\
              tau_c1_requested,tau_c1_achieved,tau_c2_requested,tau_c2_achieved,bandwidth,digest\n\
              0,{k0},\"one, two\",10,ok,,,,0.5,,0.25,0,0.005,,,,400,d\n\
              1,{k1},x,11,diverged,3.12,2,L14,0.5,0.125,,0,,,0.005,,400,d\n"

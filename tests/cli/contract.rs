@@ -3,7 +3,7 @@
 //! What a run directory must hold (docs/reference.md "Outputs"):
 //! - `summary.json`: `scenario`, `seed`, `digest` (64 hex digits), `steps`, `sim_seconds`,
 //!   `wall_seconds`, `max_constraint_violation`, `mean_cost`; on a controlled run also
-//!   `mean_cost_<method>` for every method with an objective column in epochs.csv;
+//!   `unpaired_mean_cost_<method>` for every method with an objective column in epochs.csv;
 //! - `summary.json` also: `invariants` with `start` and `end` (`t`, `momentum`,
 //!   `angular_momentum`, `kinetic_energy`) and the drift fields; on SMC runs
 //!   `boundary_layer` (`epsilon`, `steps_outside`, `share_outside`, `worst`,
@@ -138,7 +138,7 @@ fn check_methods(s: &Value, methods: &[String], out: &mut Vec<String>) {
         .unwrap_or("?")
         .to_string();
     for m in methods.iter().chain(std::iter::once(&own)) {
-        let key = format!("mean_cost_{m}");
+        let key = format!("unpaired_mean_cost_{m}");
         if !s.get(&key).is_some_and(|v| v.is_number() || v.is_null()) {
             out.push(format!("summary.json: no per-method mean cost '{key}'"));
         }
