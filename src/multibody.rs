@@ -16,4 +16,4 @@ pub mod state;
 pub mod system;
 
 pub use state::State;
-pub use system::System;
+pub use system::{RowLoad, System};

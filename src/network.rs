@@ -7,5 +7,5 @@ pub mod route;
 pub mod tdma;
 
 pub use channel::Channel;
-pub use message::{LineSample, Message, Payload};
+pub use message::{LineSample, Message, Payload, StepRate};
 pub use route::Route;

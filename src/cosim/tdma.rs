@@ -68,7 +68,8 @@ impl TdmaLink {
             .as_ref()
             .map(|p| p.node_of.clone())
             .unwrap_or_default();
-        let frames = FrameSizes::from_channels(channels, rigid, coupling, cfg.header_bytes, &|r| {
+        let wire = (rigid, coupling, s.slopes_multipliers());
+        let frames = FrameSizes::from_channels(channels, wire, cfg.header_bytes, &|r| {
             lines.on_route(s, &node_of, r)
         });
         let net = TdmaNetwork::new(cfg, s.seed, frames, channels.len(), initial)?;

@@ -58,13 +58,39 @@ pub struct System {
     /// stabilizer absorbs, and the largest such residual among them.
     pub(crate) cg_stalled: usize,
     pub(crate) cg_worst: f64,
-    /// Whether the multipliers at each step start are kept for an alignment row's
-    /// slope: Baumgarte on a multi-stage integrator with a joint's alignment rows (see
+    /// Whether the multipliers at each step start are kept for the rows' slopes:
+    /// Baumgarte on a multi-stage integrator with rows (see
     /// [`System::multiplier_and_rate`]).
     pub(crate) keeps_slopes: bool,
     /// Those multipliers at the last step start; empty before the first step and when
     /// none are kept.
     pub(crate) z_step: Vec<f64>,
+}
+
+/// A row's load on one of its bodies with its rates, for a border message
+/// ([`System::link_load_and_rate_on`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct RowLoad {
+    /// Force [N].
+    pub force: Vector3<f64>,
+    /// Torque [N·m].
+    pub torque: Vector3<f64>,
+    /// Force rate [N/s], carried as far as the coupling extrapolates.
+    pub force_rate: Vector3<f64>,
+    /// Torque rate [N·m/s], likewise.
+    pub torque_rate: Vector3<f64>,
+    /// The force's rate measured over the last step alone [N/s] (a Baumgarte
+    /// multiplier's slope on a row that is not an alignment row), carried one step.
+    pub step_force_rate: Vector3<f64>,
+    /// The torque's, likewise [N·m/s].
+    pub step_torque_rate: Vector3<f64>,
+}
+
+/// A row's multiplier with its rates ([`System::multiplier_and_rate`]).
+struct RowRates {
+    z: f64,
+    rate: f64,
+    step_rate: f64,
 }
 
 /// The rates of a system's extra loads over a step (see [`System::extra_rate`]).
@@ -211,12 +237,7 @@ impl System {
             max_violation: scenario.max_violation,
             cg_stalled: 0,
             cg_worst: 0.0,
-            keeps_slopes: matches!(scenario.stabilizer, Stabilizer::Baumgarte { .. })
-                && rk4
-                && scenario
-                    .links
-                    .iter()
-                    .any(|l| matches!(l.kind, RowKind::Align(_))),
+            keeps_slopes: scenario.slopes_multipliers(),
             z_step: Vec::new(),
         }
     }
@@ -414,8 +435,8 @@ impl System {
     ) -> (Vector3<f64>, Vector3<f64>) {
         let link = &self.links[l];
         if link.joint.is_some() {
-            let [f, t, _, _] = self.joint_row_load_on(state, l, body);
-            return (f, t);
+            let load = self.joint_row_load_on(state, l, body);
+            return (load.force, load.torque);
         }
         let anchor = |i: usize, r: &Vector3<f64>| {
             if self.rigid {
@@ -444,15 +465,10 @@ impl System {
     /// `d(n z)/dt = ṅ z + n ż` [N/s] and `d(r × n z)/dt` [N·m/s], with
     /// `ṅ = (u − n (n·u)) / d` from the anchors' relative velocity `u` in `state`, and
     /// `ż` the SMC law's rate at the last evaluation (the slope the integrator used over
-    /// the step that ended at `state`). Under Baumgarte `z` is algebraic: only an
-    /// alignment row sends a `ż`, its slope over the last step
-    /// ([`System::multiplier_and_rate`]). One pass for both, as a message needs both.
-    pub fn link_load_and_rate_on(
-        &self,
-        state: &super::State,
-        l: usize,
-        body: usize,
-    ) -> [Vector3<f64>; 4] {
+    /// the step that ended at `state`). Under Baumgarte `z` is algebraic and `ż` its
+    /// slope over the last step ([`System::multiplier_and_rate`]), a step rate on a row
+    /// whose direction does not turn it. One pass for all, as a message needs all.
+    pub fn link_load_and_rate_on(&self, state: &super::State, l: usize, body: usize) -> RowLoad {
         let link = &self.links[l];
         if link.joint.is_some() {
             return self.joint_row_load_on(state, l, body);
@@ -469,24 +485,27 @@ impl System {
         let d = (state.p[link.a] + ra - state.p[link.b] - rb).norm();
         let u = state.v[link.a] + wa.cross(&ra) - state.v[link.b] - wb.cross(&rb);
         let n_dot = (u - n * n.dot(&u)) / d;
-        let (z, z_dot) = self.multiplier_and_rate(state, l);
+        let rates = self.multiplier_and_rate(state, l);
+        let (z, z_dot) = (rates.z, rates.rate);
         let f_dot = n_dot * z + n * z_dot;
         let f = n * z;
-        if body == link.a {
-            [
-                f,
-                ra.cross(&n) * z,
-                f_dot,
-                wa.cross(&ra).cross(&f) + ra.cross(&f_dot),
-            ]
+        let (r, w, sign) = if body == link.a {
+            (ra, wa, 1.0)
         } else {
-            [
-                -n * z,
-                -rb.cross(&n) * z,
-                -f_dot,
-                -(wb.cross(&rb).cross(&f) + rb.cross(&f_dot)),
-            ]
+            (rb, wb, -1.0)
+        };
+        let mut load = RowLoad {
+            force: f * sign,
+            torque: r.cross(&n) * z * sign,
+            force_rate: f_dot * sign,
+            torque_rate: (w.cross(&r).cross(&f) + r.cross(&f_dot)) * sign,
+            ..RowLoad::default()
+        };
+        if rates.step_rate != 0.0 {
+            load.step_force_rate = n * rates.step_rate * sign;
+            load.step_torque_rate = r.cross(&n) * rates.step_rate * sign;
         }
+        load
     }
 
     /// [`link_load_and_rate_on`](Self::link_load_and_rate_on) for a joint's row (rigid
@@ -494,10 +513,11 @@ impl System {
     /// and their rates. An offset row's `n` is a fixed axis, so its force turns only
     /// with `ż`; its lever `R r` turns with the body (`ċ = (ω × R r) × n`). An
     /// alignment row has no force, and its `c = u × v` turns with both bodies.
-    fn joint_row_load_on(&self, state: &super::State, l: usize, body: usize) -> [Vector3<f64>; 4] {
+    fn joint_row_load_on(&self, state: &super::State, l: usize, body: usize) -> RowLoad {
         let link = &self.links[l];
         let row = super::dynamics::row_kinematics(link, state, self.rigid);
-        let (z, z_dot) = self.multiplier_and_rate(state, l);
+        let rates = self.multiplier_and_rate(state, l);
+        let (z, z_dot) = (rates.z, rates.rate);
         // `ċ_a`, `ċ_b`: an alignment row's from its kinematics; an offset row's levers
         // turn with their bodies (the world's side does not turn).
         let (ca_dot, cb_dot) = match &link.kind {
@@ -525,35 +545,74 @@ impl System {
             RowKind::Slide(_) => row.n_dot * z + row.n * z_dot,
             _ => row.n * z_dot,
         };
-        if body == link.a {
-            [row.n * z, row.ca * z, f_dot, ca_dot * z + row.ca * z_dot]
+        let mut load = if body == link.a {
+            RowLoad {
+                force: row.n * z,
+                torque: row.ca * z,
+                force_rate: f_dot,
+                torque_rate: ca_dot * z + row.ca * z_dot,
+                ..RowLoad::default()
+            }
         } else {
-            [
-                -row.n * z,
-                -row.cb * z,
-                -f_dot,
-                -(cb_dot * z + row.cb * z_dot),
-            ]
+            RowLoad {
+                force: -row.n * z,
+                torque: -row.cb * z,
+                force_rate: -f_dot,
+                torque_rate: -(cb_dot * z + row.cb * z_dot),
+                ..RowLoad::default()
+            }
+        };
+        if rates.step_rate != 0.0 {
+            let (sign, c) = if body == link.a {
+                (1.0, row.ca)
+            } else {
+                (-1.0, row.cb)
+            };
+            load.step_force_rate = row.n * rates.step_rate * sign;
+            load.step_torque_rate = c * rates.step_rate * sign;
         }
+        load
     }
 
-    /// Row `l`'s multiplier [N] and its rate [N/s] for a border message, taken between
+    /// Row `l`'s multiplier [N] and its rates [N/s] for a border message, taken between
     /// steps: SMC's state `z` and the law's `ż`; Baumgarte's algebraic `z` as the last
     /// evaluation left it and, on a multi-stage integrator, its slope over the last
     /// step, from the step's first stage to its last (`(z(t) − z(t − h)) / h`, both
     /// evaluated inside one step, so no ghost correction between them makes a jump of
-    /// it). A single-stage step evaluates once: no slope, as before.
-    fn multiplier_and_rate(&self, state: &super::State, l: usize) -> (f64, f64) {
+    /// it). An alignment row's slope is its rate (its couple's direction turns with a
+    /// spinning body while its multiplier turns it back, so the two travel together);
+    /// every other row's is a step rate, carried one step ([`RowLoad`]). A single-stage
+    /// step evaluates once: no slope.
+    fn multiplier_and_rate(&self, state: &super::State, l: usize) -> RowRates {
         match self.stabilizer {
-            Stabilizer::Smc { .. } => (state.z[l], self.k[0].z.get(l).copied().unwrap_or(0.0)),
+            Stabilizer::Smc { .. } => RowRates {
+                z: state.z[l],
+                rate: self.k[0].z.get(l).copied().unwrap_or(0.0),
+                step_rate: 0.0,
+            },
             Stabilizer::Baumgarte { .. } => {
                 let z = self.ws.z_alg[l];
-                let aligns = matches!(self.links[l].kind, RowKind::Align(_));
-                let rate = match self.z_step.get(l) {
-                    Some(&start) if aligns => (z - start) / self.dt.as_secs_f64(),
-                    _ => 0.0,
-                };
-                (z, rate)
+                let slope = self
+                    .z_step
+                    .get(l)
+                    .map(|&start| (z - start) / self.dt.as_secs_f64());
+                match (slope, &self.links[l].kind) {
+                    (Some(rate), RowKind::Align(_)) => RowRates {
+                        z,
+                        rate,
+                        step_rate: 0.0,
+                    },
+                    (Some(step_rate), _) => RowRates {
+                        z,
+                        rate: 0.0,
+                        step_rate,
+                    },
+                    (None, _) => RowRates {
+                        z,
+                        rate: 0.0,
+                        step_rate: 0.0,
+                    },
+                }
             }
         }
     }
@@ -567,6 +626,8 @@ impl System {
     /// without `ż` only the turning was extrapolated, and a spinning rotor on a border
     /// hinge was driven by a couple turning at its spin rate (its angular momentum off
     /// by 30 % at 20 ms with no latency, where holding the couple kept it to 1.5 %).
+    /// Every other row's force held over RK4's stages made a partitioned run first
+    /// order; its slope is carried one step.
     pub(crate) fn note_step_multipliers(&mut self) {
         if self.keeps_slopes {
             self.z_step.clone_from(&self.ws.z_alg);

@@ -30,6 +30,9 @@ pub enum Payload {
         force_rate: Vector3<f64>,
         /// Rate of the owner-side torque [N·m/s] (zero where not sent).
         torque_rate: Vector3<f64>,
+        /// The part of the load's rate measured over the sender's last step alone.
+        #[serde(default)]
+        step_rate: StepRate,
         /// `passive`: the energy the body has put into its port with the receiver so far
         /// [J] (zero under the other schemes, which do not send it).
         energy: f64,
@@ -62,6 +65,9 @@ pub enum Payload {
         force_rate: Vector3<f64>,
         /// Rate of the torque [N·m/s] (zero where not sent).
         torque_rate: Vector3<f64>,
+        /// The part of the load's rate measured over the sender's last step alone.
+        #[serde(default)]
+        step_rate: StepRate,
         /// `passive`: the energy the sender's bodies have put into the port of this
         /// body so far [J] (zero where not sent).
         energy: f64,
@@ -70,6 +76,24 @@ pub enum Payload {
         #[serde(default)]
         impulse: Vector3<f64>,
     },
+}
+
+/// The part of a load's rate that its sender measured over its last step alone: the
+/// slope of an exact (Baumgarte) multiplier from the step's first stage to its last, on
+/// a row whose direction does not turn it (a joint's offset and slide rows, a distance
+/// link). The receiver carries the load by it for one step at most, then holds it.
+///
+/// Why apart from the rate: over the step after the sample it is what keeps a
+/// partitioned RK4 run second order (held over the stages, the force made it first
+/// order). Carried over a whole sample period it is a one-step slope extrapolated
+/// across many steps, and it closes the loop a border joint has with the load behind
+/// its ghost (docs/method.md §2.1): a chain at rest split at a joint diverged at 4 ms.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct StepRate {
+    /// Force rate [N/s].
+    pub force: Vector3<f64>,
+    /// Torque rate [N·m/s].
+    pub torque: Vector3<f64>,
 }
 
 impl Payload {
@@ -84,13 +108,19 @@ impl Payload {
 
     /// Number of `f64` values on the wire (rotation only where the scene has it, the
     /// force rates only where the coupling sends them).
-    pub fn floats(&self, rigid: bool, coupling: Coupling) -> usize {
+    pub fn floats(&self, rigid: bool, coupling: Coupling, step_rates: bool) -> usize {
         let lines = match self {
             Payload::State { lines, .. } => lines.len(),
             Payload::Force { .. } | Payload::Signal { .. } => 0,
             Payload::Line(_) => 1,
         };
-        crate::network::tdma::frame::floats_per_route(self.kind(), rigid, coupling, lines)
+        crate::network::tdma::frame::floats_per_route(
+            self.kind(),
+            rigid,
+            coupling,
+            step_rates,
+            lines,
+        )
     }
 }
 

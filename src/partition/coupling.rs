@@ -92,8 +92,11 @@ impl PortAccount {
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
 use crate::kernel::SimTime;
+use crate::network::StepRate;
 
-/// A force (and torque) with its rate, sampled at `sent`, applied as `F + Ḟ·age`.
+/// A force (and torque) with its rate, sampled at `sent`, applied as `F + Ḟ·age`, and
+/// the part of its rate measured over the sender's last step ([`StepRate`]) carried for
+/// one step at most.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Extrapolated {
     /// Force at `sent` [N].
@@ -104,6 +107,11 @@ pub struct Extrapolated {
     pub force_rate: Vector3<f64>,
     /// Torque rate [N·m/s].
     pub torque_rate: Vector3<f64>,
+    /// The rate measured over the sender's last step, carried while the age is below
+    /// [`Extrapolated::step`].
+    pub step_rate: StepRate,
+    /// The sender's step (every node steps alike).
+    pub step: SimTime,
     /// Sample time.
     pub sent: SimTime,
 }
@@ -116,27 +124,53 @@ impl Extrapolated {
             torque: Vector3::zeros(),
             force_rate: Vector3::zeros(),
             torque_rate: Vector3::zeros(),
+            step_rate: StepRate::default(),
+            step: SimTime::ZERO,
             sent: SimTime::ZERO,
         }
     }
 
-    /// `(Ḟ, Ṫ)` at `t` while the age is below `cap`, zero once the value is held: the
-    /// slope of [`Extrapolated::at`] going forward from `t`.
+    /// `(Ḟ, Ṫ)` at `t` while the age is below `cap` (the step rate while it is below
+    /// the step too), zero once the value is held: the slope of [`Extrapolated::at`]
+    /// going forward from `t`.
     pub fn rate_at(&self, t: SimTime, cap: SimTime) -> (Vector3<f64>, Vector3<f64>) {
-        if t.0.saturating_sub(self.sent.0) < cap.0 {
-            (self.force_rate, self.torque_rate)
+        let age = t.0.saturating_sub(self.sent.0);
+        let mut rate = (Vector3::zeros(), Vector3::zeros());
+        if age < cap.0 {
+            rate = (self.force_rate, self.torque_rate);
+            if age < self.step.0 && self.step_rate != StepRate::default() {
+                rate.0 += self.step_rate.force;
+                rate.1 += self.step_rate.torque;
+            }
+        }
+        rate
+    }
+
+    /// The step rate at `t`: while the age is below the step and `cap`, else zero.
+    pub fn step_rate_at(&self, t: SimTime, cap: SimTime) -> StepRate {
+        let age = t.0.saturating_sub(self.sent.0);
+        if age < cap.0.min(self.step.0) {
+            self.step_rate
         } else {
-            (Vector3::zeros(), Vector3::zeros())
+            StepRate::default()
         }
     }
 
-    /// `(F + Ḟ·age, T + Ṫ·age)` at `t`, the age capped at `cap` (never negative).
+    /// `(F + Ḟ·age + Ḟ_step·min(age, step), …)` at `t`, the age capped at `cap` (never
+    /// negative).
     pub fn at(&self, t: SimTime, cap: SimTime) -> (Vector3<f64>, Vector3<f64>) {
-        let age = SimTime(t.0.saturating_sub(self.sent.0).min(cap.0)).as_secs_f64();
-        (
-            self.force + self.force_rate * age,
-            self.torque + self.torque_rate * age,
-        )
+        let age = SimTime(t.0.saturating_sub(self.sent.0).min(cap.0));
+        let (mut force, mut torque) = (
+            self.force + self.force_rate * age.as_secs_f64(),
+            self.torque + self.torque_rate * age.as_secs_f64(),
+        );
+        // Nothing added when there is no step rate, so the bits stay as they were.
+        if self.step_rate != StepRate::default() {
+            let carried = SimTime(age.0.min(self.step.0)).as_secs_f64();
+            force += self.step_rate.force * carried;
+            torque += self.step_rate.torque * carried;
+        }
+        (force, torque)
     }
 }
 
@@ -308,10 +342,44 @@ mod tests {
             force_rate: Vector3::new(10.0, 0.0, 0.0),
             torque_rate: Vector3::zeros(),
             sent: SimTime(1_000_000_000),
+            ..Extrapolated::zero()
         };
         let h = SimTime(100_000_000);
         assert!((e.at(SimTime(1_050_000_000), h).0.x - 1.5).abs() < 1e-12);
         assert!((e.at(SimTime(5_000_000_000), h).0.x - 2.0).abs() < 1e-12);
         assert_eq!(e.at(SimTime(0), h).0.x, 1.0, "never extrapolated backwards");
+    }
+
+    #[test]
+    fn a_step_rate_is_carried_for_one_step_then_held() {
+        let e = Extrapolated {
+            force: Vector3::new(1.0, 0.0, 0.0),
+            force_rate: Vector3::new(10.0, 0.0, 0.0),
+            step_rate: StepRate {
+                force: Vector3::new(100.0, 0.0, 0.0),
+                torque: Vector3::new(0.0, 0.0, -100.0),
+            },
+            step: SimTime(1_000_000),
+            sent: SimTime(1_000_000_000),
+            ..Extrapolated::zero()
+        };
+        let cap = SimTime(10_000_000);
+        // Half a step on: both rates carry it.
+        let (f, t) = e.at(SimTime(1_000_500_000), cap);
+        assert!((f.x - (1.0 + 10.0 * 5e-4 + 100.0 * 5e-4)).abs() < 1e-12);
+        assert!((t.z + 100.0 * 5e-4).abs() < 1e-12);
+        assert_eq!(e.rate_at(SimTime(1_000_500_000), cap).0.x, 110.0);
+        // Three steps on: the step rate's one step is held, the rate carries on.
+        let (f, _) = e.at(SimTime(1_003_000_000), cap);
+        assert!((f.x - (1.0 + 10.0 * 3e-3 + 100.0 * 1e-3)).abs() < 1e-12);
+        assert_eq!(e.rate_at(SimTime(1_003_000_000), cap).0.x, 10.0);
+        assert_eq!(
+            e.step_rate_at(SimTime(1_003_000_000), cap),
+            StepRate::default()
+        );
+        // A cap shorter than the step stops both.
+        let short = SimTime(200_000);
+        let (f, _) = e.at(SimTime(1_000_500_000), short);
+        assert!((f.x - (1.0 + 110.0 * 2e-4)).abs() < 1e-12);
     }
 }

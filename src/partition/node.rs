@@ -17,8 +17,8 @@ use super::line::{initial_wave, LineEnd, LineSet};
 use super::momentum::MomentumLedger;
 use super::Layout;
 use crate::kernel::SimTime;
-use crate::multibody::{State, System};
-use crate::network::Payload;
+use crate::multibody::{RowLoad, State, System};
+use crate::network::{Payload, StepRate};
 use crate::scenario::model::{BodyModel, Coupling, GhostMode, Integrator, LoadAt, Scenario};
 
 /// A border force received from another node: held until the next arrival (`reset`),
@@ -345,6 +345,7 @@ impl Node {
         let mut torque = Vector3::zeros();
         let mut force_rate = Vector3::zeros();
         let mut torque_rate = Vector3::zeros();
+        let mut step_rate = StepRate::default();
         for f in self.system.forces.iter().filter(|f| f.body == i) {
             if f.applied == LoadAt::Centre {
                 force += f.at(t);
@@ -370,11 +371,13 @@ impl Node {
         torque += tq;
         for &l in &self.incident[i] {
             if rates {
-                let [f, tq, fr, tr] = self.system.link_load_and_rate_on(&self.state, l, i);
-                force += f;
-                torque += tq;
-                force_rate += fr;
-                torque_rate += tr;
+                let load = self.system.link_load_and_rate_on(&self.state, l, i);
+                force += load.force;
+                torque += load.torque;
+                force_rate += load.force_rate;
+                torque_rate += load.torque_rate;
+                step_rate.force += load.step_force_rate;
+                step_rate.torque += load.step_torque_rate;
             } else {
                 let (f, tq) = self.system.link_load_on(&self.state, l, i);
                 force += f;
@@ -392,6 +395,9 @@ impl Node {
             if rates {
                 force_rate += h.value.force_rate;
                 torque_rate += h.value.torque_rate;
+                let relayed = h.value.step_rate_at(t, self.coupling.scheme.extrapolate());
+                step_rate.force += relayed.force;
+                step_rate.torque += relayed.torque;
             }
         }
         for end in self.lines.iter().filter(|e| e.body == i) {
@@ -409,6 +415,7 @@ impl Node {
             torque,
             force_rate,
             torque_rate,
+            step_rate,
             energy: self
                 .coupling
                 .ports_in
@@ -438,11 +445,15 @@ impl Node {
             if self.coupling.scheme.predicts() {
                 self.system.link_load_and_rate_on(&self.state, ll, body)
             } else {
-                let (f, t) = self.system.link_load_on(&self.state, ll, body);
-                [f, t, Vector3::zeros(), Vector3::zeros()]
+                let (force, torque) = self.system.link_load_on(&self.state, ll, body);
+                RowLoad {
+                    force,
+                    torque,
+                    ..RowLoad::default()
+                }
             }
         };
-        let [mut force, mut torque, mut force_rate, mut torque_rate] = load(ll);
+        let mut sum = load(ll);
         // A joint's force is the sum of its rows' (consecutive here, as in the file):
         // one message for the whole joint.
         if let Some(joint) = self.system.links()[ll].joint {
@@ -450,20 +461,26 @@ impl Node {
                 if self.system.links()[next].joint.map(|j| j.0) != Some(joint.0) {
                     break;
                 }
-                let [f, t, fr, tr] = load(next);
-                force += f;
-                torque += t;
-                force_rate += fr;
-                torque_rate += tr;
+                let row = load(next);
+                sum.force += row.force;
+                sum.torque += row.torque;
+                sum.force_rate += row.force_rate;
+                sum.torque_rate += row.torque_rate;
+                sum.step_force_rate += row.step_force_rate;
+                sum.step_torque_rate += row.step_torque_rate;
             }
         }
         Payload::Force {
             link: l,
             body: g,
-            force,
-            torque,
-            force_rate,
-            torque_rate,
+            force: sum.force,
+            torque: sum.torque,
+            force_rate: sum.force_rate,
+            torque_rate: sum.torque_rate,
+            step_rate: StepRate {
+                force: sum.step_force_rate,
+                torque: sum.step_torque_rate,
+            },
             impulse: self
                 .momentum
                 .as_ref()
@@ -490,6 +507,7 @@ impl Node {
                 torque,
                 force_rate,
                 torque_rate,
+                step_rate,
                 energy,
                 lines,
             } => {
@@ -509,6 +527,8 @@ impl Node {
                             torque: *torque,
                             force_rate: *force_rate,
                             torque_rate: *torque_rate,
+                            step_rate: *step_rate,
+                            step: self.system.dt(),
                             sent,
                         };
                     }
@@ -562,6 +582,7 @@ impl Node {
                 torque,
                 force_rate,
                 torque_rate,
+                step_rate,
                 energy,
                 body,
                 impulse,
@@ -589,6 +610,8 @@ impl Node {
                     torque: *torque,
                     force_rate: *force_rate,
                     torque_rate: *torque_rate,
+                    step_rate: *step_rate,
+                    step: self.system.dt(),
                     sent,
                 };
                 if self.coupling.scheme == Coupling::Reset {

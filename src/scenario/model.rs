@@ -774,6 +774,16 @@ pub struct Scenario {
 }
 
 impl Scenario {
+    /// Whether the rows' exact multipliers are kept at each step start for their slope
+    /// over the step: Baumgarte on a multi-stage integrator with rows. A predicting
+    /// coupling then sends a border load's step rate (`network::StepRate`) beside its
+    /// rate.
+    pub fn slopes_multipliers(&self) -> bool {
+        matches!(self.stabilizer, Stabilizer::Baumgarte { .. })
+            && self.integrator == Integrator::Rk4
+            && !self.links.is_empty()
+    }
+
     /// The traced FMU outputs' names, `unit.variable`, FMU by FMU in scenario order: the
     /// trace's signal columns and every value list that follows them.
     pub fn signal_names(&self) -> Vec<String> {

@@ -82,8 +82,16 @@ pub const MOMENTUM_FLOATS: usize = 3;
 /// a coupling that sends rates adds one rate per force and torque value and, on a
 /// force, the impulse on the sender's ghost (three values), and the `passive` one its
 /// energy report (one value). Such a coupling's frame also carries its sender's
-/// momentum account once ([`MOMENTUM_FLOATS`]).
-pub fn floats_per_route(kind: DataKind, rigid: bool, coupling: Coupling, lines: usize) -> usize {
+/// momentum account once ([`MOMENTUM_FLOATS`]). Where it sends step rates
+/// (`step_rates`: exact multipliers' slopes, `network::StepRate`) a force or state adds
+/// one more per force and torque value.
+pub fn floats_per_route(
+    kind: DataKind,
+    rigid: bool,
+    coupling: Coupling,
+    step_rates: bool,
+    lines: usize,
+) -> usize {
     // A transmission line's sample: wave and window length, and on a force route the
     // anchor's position and velocity (a state route's receiver has them from the state
     // it carries: the same values).
@@ -106,7 +114,11 @@ pub fn floats_per_route(kind: DataKind, rigid: bool, coupling: Coupling, lines: 
         (DataKind::Force, true) => 6,
         (DataKind::Signal, _) => 1,
     };
-    let rates = if coupling.predicts() { loads } else { 0 };
+    let rates = match (coupling.predicts(), step_rates) {
+        (false, _) => 0,
+        (true, false) => loads,
+        (true, true) => 2 * loads,
+    };
     let energy = usize::from(coupling.tank().is_some());
     let impulse = if kind == DataKind::Force { impulse } else { 0 };
     base + rates + energy + impulse + lines * 2
@@ -173,8 +185,7 @@ impl FrameSizes {
     /// coupling's frame its sender's momentum account ([`MOMENTUM_FLOATS`]).
     pub fn from_channels(
         channels: &[Channel],
-        rigid: bool,
-        coupling: Coupling,
+        (rigid, coupling, step_rates): (bool, Coupling, bool),
         header_bytes: u64,
         lines: &dyn Fn(&Route) -> usize,
     ) -> FrameSizes {
@@ -182,7 +193,7 @@ impl FrameSizes {
         for (c, ch) in channels.iter().enumerate() {
             for r in &ch.routes {
                 *floats.entry((tdma_node(r.from), c)).or_default() +=
-                    floats_per_route(r.kind, rigid, coupling, lines(r));
+                    floats_per_route(r.kind, rigid, coupling, step_rates, lines(r));
             }
         }
         let account = if coupling.predicts() {
@@ -311,23 +322,28 @@ mod tests {
                 },
             },
         );
-        assert_eq!(floats_per_route(DataKind::State, false, r, 0), 9);
-        assert_eq!(floats_per_route(DataKind::State, true, r, 0), 19);
-        assert_eq!(floats_per_route(DataKind::Force, false, r, 0), 3);
-        assert_eq!(floats_per_route(DataKind::Force, true, r, 0), 6);
+        assert_eq!(floats_per_route(DataKind::State, false, r, false, 0), 9);
+        assert_eq!(floats_per_route(DataKind::State, true, r, false, 0), 19);
+        assert_eq!(floats_per_route(DataKind::Force, false, r, false, 0), 3);
+        assert_eq!(floats_per_route(DataKind::Force, true, r, false, 0), 6);
         // A predicting coupling's force also carries the impulse on the sender's ghost
         // (3 values).
-        assert_eq!(floats_per_route(DataKind::State, false, p, 0), 12);
-        assert_eq!(floats_per_route(DataKind::State, true, p, 0), 25);
-        assert_eq!(floats_per_route(DataKind::Force, false, p, 0), 9);
-        assert_eq!(floats_per_route(DataKind::Force, true, p, 0), 15);
-        assert_eq!(floats_per_route(DataKind::State, false, e, 0), 13);
-        assert_eq!(floats_per_route(DataKind::Force, true, e, 0), 16);
+        assert_eq!(floats_per_route(DataKind::State, false, p, false, 0), 12);
+        assert_eq!(floats_per_route(DataKind::State, true, p, false, 0), 25);
+        assert_eq!(floats_per_route(DataKind::Force, false, p, false, 0), 9);
+        assert_eq!(floats_per_route(DataKind::Force, true, p, false, 0), 15);
+        assert_eq!(floats_per_route(DataKind::State, false, e, false, 0), 13);
+        assert_eq!(floats_per_route(DataKind::Force, true, e, false, 0), 16);
         // A line: 2 values more per line on a state route; its own sample (and the
         // owner end's impulse) on a force route.
-        assert_eq!(floats_per_route(DataKind::State, false, e, 2), 17);
-        assert_eq!(floats_per_route(DataKind::Force, false, e, 1), 11);
-        assert_eq!(floats_per_route(DataKind::Force, false, r, 1), 8);
+        assert_eq!(floats_per_route(DataKind::State, false, e, false, 2), 17);
+        assert_eq!(floats_per_route(DataKind::Force, false, e, false, 1), 11);
+        assert_eq!(floats_per_route(DataKind::Force, false, r, false, 1), 8);
+        // Exact multipliers' step rates: one more per force and torque value where the
+        // coupling sends rates, none where it does not.
+        assert_eq!(floats_per_route(DataKind::Force, true, p, true, 0), 21);
+        assert_eq!(floats_per_route(DataKind::State, true, p, true, 0), 31);
+        assert_eq!(floats_per_route(DataKind::Force, true, r, true, 0), 6);
     }
 
     #[test]
