@@ -17,9 +17,10 @@
 # subdirectories), the stability map (results/stability/), the coupling study
 # (results/coupling/, and of the mechanisms in scenarios/mechanisms/ under
 # results/coupling/mechanisms/) with the commands docs/accuracy.md and docs/guide.md give, and
-# the sweeps behind the thesis-claim table (results/sweeps/dsm_size_*/ and measure_*/,
-# then the table in results/README.md); they take minutes and their wall-time columns
-# change on every run, so the default leaves them alone.
+# the sweeps behind the thesis-claim table (results/sweeps/dsm_size_*/, measure_*/ and
+# seeds_*/, then the tables in results/README.md and results/claims.csv); they take
+# minutes and their wall-time columns change on every run, so the default leaves them
+# alone.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 studies=0
@@ -102,8 +103,11 @@ if [ $studies -eq 1 ]; then
   # scenarios/sweeps/make_thesis_claims.py): rerun from scratch, each point keeping its
   # summary.json and epochs.csv (stored: results/sweeps/.gitignore lets these in), then
   # the table is rewritten into results/README.md.
+  # The seeds_* sweeps measure the table's verdicts over ten load phases (ideal
+  # channels) or ten seeds (TDMA); measure_Ts varies the server's period.
   for s in dsm_size_cp dsm_size_cp_hold dsm_size_up measure_ramp measure_T10 \
-    measure_tdma4 measure_tdma16; do
+    measure_tdma4 measure_tdma16 measure_Ts seeds_space_cp seeds_time_cp seeds_space_up \
+    seeds_tdma4 seeds_tdma16; do
     rm -rf "results/sweeps/$s"
     "$bin" sweep "scenarios/sweeps/$s.json" --out "results/sweeps/$s" --keep summary \
       >/dev/null || { echo "results/sweeps/$s: failed"; exit 1; }
