@@ -409,7 +409,7 @@ fn a_free_chain_split_at_a_border_joint_keeps_its_invariants() {
 
 /// The double pendulum released horizontal (a chaotic swing of about 20 J), split at
 /// its middle joint, under `predict` and the default `passive`: at 5 ms its energy stays
-/// within 2 J of the monolithic run's (the exact law: 0.88 J; the SMC law by name:
+/// within 2 J of the monolithic run's (the exact law: 0.88 J, and 0.93 J at 6 ms; the SMC law by name:
 /// 2.01 J against its own monolithic 1.98 J). At 20 ms it stays bounded, but its energy
 /// moves 21–33 J under the exact law and 35–55 J under SMC: printed, open (method
 /// §2.1).
@@ -426,6 +426,7 @@ fn a_double_pendulum_split_at_its_middle_joint_keeps_its_energy_under_delay() {
         let mono_drift = energy_drift(&mono);
         for (scheme, tau) in [
             ("passive", 0.005),
+            ("passive", 0.006),
             ("passive", 0.02),
             ("predict", 0.005),
             ("predict", 0.02),
@@ -440,7 +441,8 @@ fn a_double_pendulum_split_at_its_middle_joint_keeps_its_energy_under_delay() {
                  monolithic over 3 s, energy drift {drift:.3e} J (monolithic {mono_drift:.3e} J)",
                 tau * 1e3,
             );
-            if tau <= 0.005 {
+            // The exact law holds to 6 ms (0.93 J; 3.1 J at 8 ms, method §2.1), SMC to 5.
+            if tau <= 0.005 || (tau <= 0.006 && law.is_null()) {
                 assert!(
                     (drift - mono_drift).abs() <= 2.0,
                     "{law}, {scheme}, τ = {tau}: energy drift {drift} J"
