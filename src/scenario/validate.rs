@@ -54,8 +54,8 @@ use super::file::{
     DEFAULT_SMC_EPSILON, DEFAULT_SMC_K, DEFAULT_SMC_MU,
 };
 use super::model::{
-    BodyModel, ForceSpec, GhostMode, Integrator, LoadAt, NetworkSpec, OutputSpec, RowKind,
-    Scenario, Solver, Stabilizer,
+    BodyModel, ForceSpec, GhostMode, Integrator, LoadAt, NetworkSpec, OutputSpec, Scenario, Solver,
+    Stabilizer,
 };
 use crate::error::{Error, Result};
 use crate::kernel::SimTime;
@@ -408,29 +408,6 @@ pub fn validate(file: ScenarioFile) -> Result<Scenario> {
                     "\"hold\" freezes a ghost between arrivals, which a border joint cannot \
                      follow: model.joints[{j}] joins body {} on node {} to body {} on node {}; \
                      use \"integrate\" (the default), or keep the joint's bodies on one node",
-                    bodies[l.a].id,
-                    p.node_of[l.a] + 1,
-                    bodies[l.b].id,
-                    p.node_of[l.b] + 1
-                ),
-            ));
-        }
-    }
-    // A prismatic joint lives on one node: what a delayed border does to a slide (its
-    // normal turning with the far body) has no coupling study yet, and a border joint
-    // that is not measured is not offered.
-    if let Some(p) = &partition {
-        let across = links.iter().find(|l| {
-            matches!(l.kind, RowKind::Slide(_)) && !l.world && p.node_of[l.a] != p.node_of[l.b]
-        });
-        if let Some(l) = across {
-            let j = l.joint.map_or(0, |(j, _)| j as usize);
-            return Err(Error::invalid(
-                format!("model.joints[{j}]"),
-                format!(
-                    "joins body {} on node {} to body {} on node {}: a prismatic joint \
-                     across a partition border is not supported (put both bodies on one \
-                     node, or split the mechanism at another joint)",
                     bodies[l.a].id,
                     p.node_of[l.a] + 1,
                     bodies[l.b].id,

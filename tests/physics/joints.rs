@@ -421,12 +421,6 @@ fn bad_joints_are_refused_naming_the_field() {
             "model.joints[0].axis: a prismatic joint needs",
         ),
         (
-            json!({"type": "prismatic", "a": 1, "b": 2, "at": [1, 0, 0], "axis": [1, 0, 0]}),
-            Some(("partition", json!({"nodes": [[1], [2]]}))),
-            "model.joints[0]: joins body 1 on node 1 to body 2 on node 2: a prismatic joint \
-             across a partition border is not supported",
-        ),
-        (
             json!({"type": "slider", "a": 1, "at": [0, 0, 0]}),
             None,
             "model.joints[0].type",
