@@ -16,6 +16,11 @@ sees what was tuned:
 - `distribution`: space (borders of body 1's node against the others) and time (states
   against forces), where a scene has both.
 
+The seeded sweeps (`seeds_*`, SEEDED below) repeat the verdicts the README's summary
+rests on over ten draws: `load_phase` (both load sinusoids shifted by 2 pi k / 10; the
+ideal-channel scenes draw no random number) or `repeat` (ten seeds on TDMA), with a
+`setting` axis of whole controllers (measure and D_s).
+
 Everything else is the thesis's setting and the base scenario's: m_r = 5, T = 1 s
 (10 s for the T10 scene), B = 400 Hz, b = 5e-4, grid step 1 ms (2 ms on the 2-D UP
 square), delta = 2 ms. Every point measures the grid optimum and no optimization from
