@@ -80,6 +80,7 @@ fn grid_system(n: usize) -> (Geometry, MassData) {
         MassData {
             inv_mass: vec![1.0; bodies],
             inv_inertia: vec![Matrix3::from_diagonal_element(150.0); bodies],
+            compliance: Vec::new(),
         },
     )
 }

@@ -68,7 +68,11 @@ impl TdmaLink {
             .as_ref()
             .map(|p| p.node_of.clone())
             .unwrap_or_default();
-        let wire = (rigid, coupling, s.slopes_multipliers());
+        let extras = crate::network::tdma::frame::WireExtras {
+            step_rates: s.slopes_multipliers(),
+            reactions: s.ghosts_carry_reactions(),
+        };
+        let wire = (rigid, coupling, extras);
         let frames = FrameSizes::from_channels(channels, wire, cfg.header_bytes, &|r| {
             lines.on_route(s, &node_of, r)
         });

@@ -11,7 +11,7 @@
 //!    `s = μ²ẅ + 2μẇ + w`; Baumgarte solves `J M⁻¹ Jᵀ z = −ẅ₀ − 2αẇ − β²w` (ẅ₀ without
 //!    link forces) and adds `M⁻¹ Jᵀ z` to the accelerations.
 
-use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, Matrix6, Quaternion, UnitQuaternion, Vector3, Vector6};
 
 use super::solver::SolveError;
 use super::state::{Rates, State};
@@ -163,6 +163,24 @@ impl System {
             self.ws.inertia_world[i] = r * Matrix3::from_diagonal(&d) * r.transpose();
             self.mass.inv_inertia[i] = r * Matrix3::from_diagonal(&inv) * r.transpose();
         }
+        // A ghost carrying its owner's reaction: `W = M⁻¹ − M⁻¹ K M⁻¹`, world frame.
+        if self.reaction.iter().any(Option::is_some) {
+            self.mass.compliance.resize(self.mass.inv_mass.len(), None);
+            for (i, k) in self.reaction.iter().enumerate() {
+                self.mass.compliance[i] = k.as_ref().map(|k| {
+                    let rot = super::system::six_rotation(&state.q[i]);
+                    let mut minv = Matrix6::zeros();
+                    minv.fixed_view_mut::<3, 3>(0, 0)
+                        .copy_from(&(Matrix3::identity() * self.mass.inv_mass[i]));
+                    minv.fixed_view_mut::<3, 3>(3, 3)
+                        .copy_from(&self.mass.inv_inertia[i]);
+                    let k = rot * k * rot.transpose();
+                    minv - minv * k * minv
+                });
+            }
+        } else {
+            self.mass.compliance.clear();
+        }
     }
 
     /// Stage 2: external, held and gyroscopic loads.
@@ -285,9 +303,30 @@ impl System {
 
     /// Baumgarte: adds `M⁻¹ Jᵀ z` to the accelerations.
     fn add_multiplier_accelerations(&mut self) {
+        let whole = !self.mass.compliance.is_empty();
+        self.row_force.clear();
+        if whole {
+            self.row_force
+                .resize(self.mass.inv_mass.len(), Vector3::zeros());
+        }
         for (l, &(a, b)) in self.geo.ends.iter().enumerate() {
             let z = self.ws.z_alg[l];
             let f = self.geo.n[l] * z;
+            if whole && self.rigid {
+                let (ca, cb) = (self.geo.ca[l] * z, self.geo.cb[l] * z);
+                for (body, f, c) in [(a, f, ca), (b, -f, -cb)] {
+                    if let Some(w) = self.mass.compliance(body) {
+                        self.row_force[body] += f;
+                        let r = w * Vector6::new(f.x, f.y, f.z, c.x, c.y, c.z);
+                        self.ws.acc[body] += Vector3::new(r[0], r[1], r[2]);
+                        self.ws.alpha[body] += Vector3::new(r[3], r[4], r[5]);
+                    } else {
+                        self.ws.acc[body] += f * self.mass.inv_mass[body];
+                        self.ws.alpha[body] += self.mass.inv_inertia[body] * c;
+                    }
+                }
+                continue;
+            }
             self.ws.acc[a] += f * self.mass.inv_mass[a];
             self.ws.acc[b] -= f * self.mass.inv_mass[b];
             if self.rigid {

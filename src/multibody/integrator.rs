@@ -33,8 +33,19 @@ impl System {
         self.k[0] = k1;
         if r.is_ok() {
             self.note_step_multipliers();
+            self.book_row_forces(self.first_stage_weight(), true);
         }
         r
+    }
+
+    /// The weight [s] of the first stage's rates in the step: `h`, or `h/6` under RK4.
+    fn first_stage_weight(&self) -> f64 {
+        let h = self.dt.as_secs_f64();
+        if self.integrator == Integrator::Rk4 {
+            h / 6.0
+        } else {
+            h
+        }
     }
 
     /// [`begin_step`](Self::begin_step) of several independent systems (the nodes of a
@@ -114,6 +125,8 @@ impl System {
                 sys.rates_from_solution(state, &mut k1);
                 sys.k[0] = k1;
                 sys.note_step_multipliers();
+                let weight = sys.first_stage_weight();
+                sys.book_row_forces(weight, true);
             }
             if let Some((i, e)) = first_solve_error {
                 let failure = match &chunk[i] {
@@ -174,10 +187,13 @@ impl System {
         let result = (|| {
             state.add_scaled_into(&k[0], 0.5 * h, &mut stage);
             self.rates(half, &stage, &mut k[1])?;
+            self.book_row_forces(h / 3.0, false);
             state.add_scaled_into(&k[1], 0.5 * h, &mut stage);
             self.rates(half, &stage, &mut k[2])?;
+            self.book_row_forces(h / 3.0, false);
             state.add_scaled_into(&k[2], h, &mut stage);
             self.rates(full, &stage, &mut k[3])?;
+            self.book_row_forces(h / 6.0, false);
             // k1 + 2 k2 + 2 k3 + k4, accumulated into k[1].
             let (k0, rest) = k.split_at_mut(1);
             let (k1, rest) = rest.split_at_mut(1);

@@ -20,7 +20,7 @@ mod reuse;
 
 use std::collections::BTreeMap;
 
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 
 use crate::scenario::model::Solver;
 
@@ -44,6 +44,24 @@ pub struct MassData {
     pub inv_mass: Vec<f64>,
     /// World-frame inverse inertia [1/(kg·m²)] (rigid path only).
     pub inv_inertia: Vec<Matrix3<f64>>,
+    /// Per body, where it is set: the body's whole 6 × 6 inverse mass `W` (world frame,
+    /// force and torque to acceleration and angular acceleration) in place of `1/m` and
+    /// `I⁻¹`: a ghost that carries the response of its owner's subsystem
+    /// (`System::reaction`). Empty: none.
+    #[serde(default)]
+    pub compliance: Vec<Option<Matrix6<f64>>>,
+}
+
+impl MassData {
+    /// Body `i`'s 6 × 6 inverse mass, where it has one.
+    pub fn compliance(&self, i: usize) -> Option<&Matrix6<f64>> {
+        self.compliance.get(i).and_then(Option::as_ref)
+    }
+}
+
+/// `[n; c]`: a row's 6-vector on one body (force direction and lever).
+fn six(n: &Vector3<f64>, c: &Vector3<f64>) -> Vector6<f64> {
+    Vector6::new(n.x, n.y, n.z, c.x, c.y, c.z)
 }
 
 /// Why a solve failed.
@@ -270,36 +288,118 @@ impl JsSolver {
     /// `y = J M⁻¹ Jᵀ x`, matrix-free: scatter `Jᵀ x` to the bodies, scale by `M⁻¹`,
     /// gather `J` per link. The definition of `A`; the solves use assembled forms.
     pub fn apply(&mut self, geo: &Geometry, mass: &MassData, x: &[f64], y: &mut [f64]) {
-        self.f.fill(Vector3::zeros());
+        apply_with(geo, mass, x, y, (&mut self.f, &mut self.t));
+    }
+
+    /// `K = J_bᵀ A⁺ J_b` (world frame, 6 × 6): how this system's rows answer a force and
+    /// torque `F` put on body `b` from outside, `J_bᵀ Δz = −K M_b⁻¹ F`, with `A⁺` the
+    /// solve's own (a dependent row dropped as the factorization meets it). `None` when
+    /// no row holds `b`, or the system has more than [`REACTION_MAX_ROWS`] rows.
+    pub fn reaction_stiffness(
+        &self,
+        geo: &Geometry,
+        mass: &MassData,
+        b: usize,
+    ) -> Option<Matrix6<f64>> {
+        let m = geo.ends.len();
         let rigid = !geo.ca.is_empty();
-        for (k, &(a, b)) in geo.ends.iter().enumerate() {
-            let fk = geo.n[k] * x[k];
-            self.f[a] += fk;
-            self.f[b] -= fk;
+        if m > REACTION_MAX_ROWS || !rigid {
+            return None;
         }
-        for (f, &m) in self.f.iter_mut().zip(&mass.inv_mass) {
-            *f *= m;
-        }
-        if !rigid {
-            for (k, &(a, b)) in geo.ends.iter().enumerate() {
-                y[k] = geo.n[k].dot(&(self.f[a] - self.f[b]));
+        // J_b: row k's 6-vector on b, with its side's sign.
+        let mut jb: Vec<(usize, Vector6<f64>)> = Vec::new();
+        for (k, &(ka, kb)) in geo.ends.iter().enumerate() {
+            if ka == b {
+                jb.push((k, six(&geo.n[k], &geo.ca[k])));
+            } else if kb == b {
+                jb.push((k, -six(&geo.n[k], &geo.cb[k])));
             }
-            return;
         }
-        self.t.fill(Vector3::zeros());
-        for (k, &(a, b)) in geo.ends.iter().enumerate() {
-            self.t[a] += geo.ca[k] * x[k];
-            self.t[b] -= geo.cb[k] * x[k];
+        if jb.is_empty() {
+            return None;
         }
-        for (t, inv) in self.t.iter_mut().zip(&mass.inv_inertia) {
-            *t = inv * *t;
+        // A, dense, column by column from the matrix-free product.
+        let mut a = vec![0.0; m * m];
+        let (mut e, mut col) = (vec![0.0; m], vec![0.0; m]);
+        let bodies = mass.inv_mass.len();
+        let (mut f, mut t) = (
+            vec![Vector3::zeros(); bodies],
+            vec![Vector3::zeros(); bodies],
+        );
+        for j in 0..m {
+            e[j] = 1.0;
+            apply_with(geo, mass, &e, &mut col, (&mut f, &mut t));
+            e[j] = 0.0;
+            for i in 0..m {
+                a[i * m + j] = col[i];
+            }
         }
-        for (k, &(a, b)) in geo.ends.iter().enumerate() {
-            y[k] = geo.n[k].dot(&(self.f[a] - self.f[b])) + geo.ca[k].dot(&self.t[a])
-                - geo.cb[k].dot(&self.t[b]);
+        let mut k = Matrix6::zeros();
+        let (mut rhs, mut x, mut factor) = (vec![0.0; m], vec![0.0; m], vec![0.0; m * m]);
+        for d in 0..6 {
+            rhs.fill(0.0);
+            for (row, j) in &jb {
+                rhs[*row] = j[d];
+            }
+            factor.copy_from_slice(&a);
+            dense_cholesky_solve(&mut factor, &rhs, &mut x).ok()?;
+            for (row, j) in &jb {
+                for c in 0..6 {
+                    k[(c, d)] += j[c] * x[*row];
+                }
+            }
         }
+        Some(k)
     }
 }
+
+/// [`JsSolver::apply`] with its per-body scratch given: `f` and `t` hold `Jᵀ x` scaled by
+/// `M⁻¹` on return.
+fn apply_with(
+    geo: &Geometry,
+    mass: &MassData,
+    x: &[f64],
+    y: &mut [f64],
+    (f, t): (&mut [Vector3<f64>], &mut [Vector3<f64>]),
+) {
+    f.fill(Vector3::zeros());
+    let rigid = !geo.ca.is_empty();
+    for (k, &(a, b)) in geo.ends.iter().enumerate() {
+        let fk = geo.n[k] * x[k];
+        f[a] += fk;
+        f[b] -= fk;
+    }
+    if rigid {
+        t.fill(Vector3::zeros());
+        for (k, &(a, b)) in geo.ends.iter().enumerate() {
+            t[a] += geo.ca[k] * x[k];
+            t[b] -= geo.cb[k] * x[k];
+        }
+    }
+    for i in 0..f.len() {
+        if let Some(w) = mass.compliance(i) {
+            let r = w * six(&f[i], &t[i]);
+            f[i] = r.fixed_rows::<3>(0).into();
+            t[i] = r.fixed_rows::<3>(3).into();
+            continue;
+        }
+        f[i] *= mass.inv_mass[i];
+        if rigid {
+            t[i] = mass.inv_inertia[i] * t[i];
+        }
+    }
+    for (k, &(a, b)) in geo.ends.iter().enumerate() {
+        y[k] = if rigid {
+            geo.n[k].dot(&(f[a] - f[b])) + geo.ca[k].dot(&t[a]) - geo.cb[k].dot(&t[b])
+        } else {
+            geo.n[k].dot(&(f[a] - f[b]))
+        };
+    }
+}
+
+/// The largest system whose rows [`JsSolver::reaction_stiffness`] answers for: its
+/// dense solve costs `6 m³ / 3` per sample.
+pub const REACTION_MAX_ROWS: usize = 128;
 
 /// A squared Cholesky pivot below this fraction of the largest diagonal entry of `A`
 /// counts as singular (about 100× the f64 round-off of an elimination step).
@@ -372,10 +472,15 @@ impl Exact {
         };
         for e in &self.entries {
             let (k, l, body) = (e.k as usize, e.l as usize, e.body as usize);
-            let mut v = geo.n[k].dot(&geo.n[l]) * mass.inv_mass[body];
-            if rigid {
-                v += c(k, e.side_k).dot(&(mass.inv_inertia[body] * c(l, e.side_l)));
-            }
+            let v = if let Some(w) = mass.compliance(body) {
+                six(&geo.n[k], &c(k, e.side_k)).dot(&(w * six(&geo.n[l], &c(l, e.side_l))))
+            } else {
+                let mut v = geo.n[k].dot(&geo.n[l]) * mass.inv_mass[body];
+                if rigid {
+                    v += c(k, e.side_k).dot(&(mass.inv_inertia[body] * c(l, e.side_l)));
+                }
+                v
+            };
             // `+ (−1 · v)` as it was written: `− v`, the same bits.
             if e.same_side() {
                 values[e.value as usize] += v;
@@ -682,6 +787,7 @@ mod tests {
             MassData {
                 inv_mass: vec![1.0, 0.5, 2.0, 1.5],
                 inv_inertia,
+                compliance: Vec::new(),
             },
         )
     }
@@ -800,6 +906,7 @@ mod tests {
             MassData {
                 inv_mass,
                 inv_inertia: vec![],
+                compliance: Vec::new(),
             },
         )
     }
@@ -884,6 +991,7 @@ mod tests {
             let mass = MassData {
                 inv_mass: vec![1.0, 1.0, 1.0],
                 inv_inertia: vec![],
+                compliance: Vec::new(),
             };
             let truth = [0.7, 0.3, -0.5];
             let mut b = [0.0; 3];
@@ -1172,5 +1280,43 @@ mod tests {
             assert!(x.iter().all(|&v| v == 0.0), "{x:?}");
         }
         assert_eq!(s.factorizations(), Some(1));
+    }
+
+    /// A body `a` (1 kg) held by a ball joint at its centre to a free body `c` (3 kg):
+    /// pushed from outside, it carries `c` along, so its reaction stiffness is
+    /// `m M / (m + M)` along every axis and its whole inverse mass `1 / (m + M)`; turning
+    /// it (the joint at its centre) moves nothing else, so no torque is answered. A body
+    /// no row holds has none.
+    #[test]
+    fn a_ball_joint_makes_a_pushed_body_carry_its_partner() {
+        let (m, big) = (1.0, 3.0);
+        let ends = vec![(0, 1); 3];
+        let geo = Geometry {
+            ends: ends.clone(),
+            n: vec![Vector3::x(), Vector3::y(), Vector3::z()],
+            ca: vec![Vector3::zeros(); 3],
+            cb: vec![Vector3::zeros(); 3],
+        };
+        let mass = MassData {
+            inv_mass: vec![1.0 / m, 1.0 / big, 0.0],
+            inv_inertia: vec![Matrix3::identity() * 10.0; 3],
+            compliance: Vec::new(),
+        };
+        let solver = JsSolver::exact(ExactPath::Dense, 3, &ends);
+        let k = solver.reaction_stiffness(&geo, &mass, 0).expect("held");
+        let reduced = m * big / (m + big);
+        for i in 0..6 {
+            for j in 0..6 {
+                let want = if i == j && i < 3 { reduced } else { 0.0 };
+                assert!(
+                    (k[(i, j)] - want).abs() < 1e-12,
+                    "K[{i},{j}] = {}",
+                    k[(i, j)]
+                );
+            }
+        }
+        let minv = 1.0 / m;
+        assert!((minv - minv * k[(0, 0)] * minv - 1.0 / (m + big)).abs() < 1e-12);
+        assert!(solver.reaction_stiffness(&geo, &mass, 2).is_none());
     }
 }

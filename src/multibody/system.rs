@@ -1,6 +1,6 @@
 //! The static model (masses, inertias, links, forces) and the per-step workspace.
 
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix3, Matrix6, Vector3};
 
 use super::solver::{Geometry, JsSolver, MassData, SolveError};
 use super::state::Rates;
@@ -65,6 +65,15 @@ pub struct System {
     /// Those multipliers at the last step start; empty before the first step and when
     /// none are kept.
     pub(crate) z_step: Vec<f64>,
+    /// Per body (a ghost), where its owner sent one: how the owner's rows answer a load
+    /// put on it, `K = J_bᵀ A⁺ J_b` in the body's frame ([`System::set_reaction`]).
+    /// Empty: none.
+    pub(crate) reaction: Vec<Option<Matrix6<f64>>>,
+    /// Per body with a whole inverse mass: the force of this system's rows on it at the
+    /// last evaluation [N], and its impulse over the current step as the integrator
+    /// weighs the stages [N·s] ([`System::row_impulse`]). Empty: none.
+    pub(crate) row_force: Vec<Vector3<f64>>,
+    pub(crate) row_impulse: Vec<Vector3<f64>>,
 }
 
 /// A row's load on one of its bodies with its rates, for a border message
@@ -175,6 +184,7 @@ impl System {
         let mass = MassData {
             inv_mass,
             inv_inertia: vec![Matrix3::zeros(); nr],
+            compliance: Vec::new(),
         };
         let solver = JsSolver::new(scenario.solver, solver_bodies, &geo.ends);
         let shape = super::state::State {
@@ -239,6 +249,9 @@ impl System {
             cg_worst: 0.0,
             keeps_slopes: scenario.slopes_multipliers(),
             z_step: Vec::new(),
+            reaction: Vec::new(),
+            row_force: Vec::new(),
+            row_impulse: Vec::new(),
         }
     }
 
@@ -634,6 +647,74 @@ impl System {
         }
     }
 
+    /// Body `b`'s reaction stiffness as this system's rows give it now (world frame
+    /// turned into `b`'s frame, `state`'s orientation), for a node that ghosts `b`:
+    /// `None` where no row holds `b` (see [`JsSolver::reaction_stiffness`]).
+    pub fn reaction_of(&self, state: &super::State, b: usize) -> Option<Matrix6<f64>> {
+        let k = self.solver.reaction_stiffness(&self.geo, &self.mass, b)?;
+        let r = six_rotation(&state.q[b]);
+        Some(r.transpose() * k * r)
+    }
+
+    /// `K M_b⁻¹ F` for the load `(f, τ)` on body `b` (`k` in `b`'s frame, as
+    /// [`System::reaction_of`] gives it): minus what this system's rows add to `b`'s load
+    /// in answer to it.
+    pub fn reaction_answer(
+        &self,
+        state: &super::State,
+        b: usize,
+        k: &Matrix6<f64>,
+        (f, torque): (Vector3<f64>, Vector3<f64>),
+    ) -> (Vector3<f64>, Vector3<f64>) {
+        let r = six_rotation(&state.q[b]);
+        let k = r * k * r.transpose();
+        let a = f * self.mass.inv_mass[b];
+        let alpha = self.mass.inv_inertia[b] * torque;
+        let x = k * nalgebra::Vector6::new(a.x, a.y, a.z, alpha.x, alpha.y, alpha.z);
+        (
+            Vector3::new(x[0], x[1], x[2]),
+            Vector3::new(x[3], x[4], x[5]),
+        )
+    }
+
+    /// The impulse of this system's rows on body `b` over the last step [N·s], where `b`
+    /// answers them with a whole inverse mass (a ghost carrying its owner's reaction),
+    /// whose momentum change then does not measure it.
+    pub fn row_impulse(&self, b: usize) -> Option<Vector3<f64>> {
+        self.mass.compliance(b)?;
+        self.row_impulse.get(b).copied()
+    }
+
+    /// Adds the last evaluation's row forces, weighted by `weight` [s], to the step's
+    /// row impulses; `start` begins a step's sum.
+    pub(crate) fn book_row_forces(&mut self, weight: f64, start: bool) {
+        if self.row_force.is_empty() {
+            self.row_impulse.clear();
+            return;
+        }
+        self.row_impulse
+            .resize(self.row_force.len(), Vector3::zeros());
+        for (i, f) in self.row_impulse.iter_mut().zip(&self.row_force) {
+            if start {
+                *i = Vector3::zeros();
+            }
+            *i += f * weight;
+        }
+    }
+
+    /// Sets ghost `b`'s reaction stiffness (body frame; `None`: its owner's rows do not
+    /// hold it). From then on the ghost answers the loads of this system's rows as its
+    /// owner's subsystem does, `W = M⁻¹ − M⁻¹ K M⁻¹` in place of its own `M⁻¹`.
+    pub fn set_reaction(&mut self, b: usize, k: Option<Matrix6<f64>>) {
+        if self.reaction.len() <= b {
+            if k.is_none() {
+                return;
+            }
+            self.reaction.resize(self.mass.inv_mass.len(), None);
+        }
+        self.reaction[b] = k;
+    }
+
     /// The force [N] and torque [N·m] the springs put on body `body` in `state`.
     pub fn spring_load_on(
         &self,
@@ -660,4 +741,16 @@ impl System {
     pub fn last_solver_iterations(&self) -> usize {
         self.solver.last_iterations()
     }
+}
+
+/// The 6 × 6 rotation `diag(R, R)` of a body frame (force and torque, or acceleration
+/// and angular acceleration, turned alike).
+pub(crate) fn six_rotation(q: &nalgebra::Quaternion<f64>) -> Matrix6<f64> {
+    let r = *nalgebra::UnitQuaternion::new_normalize(*q)
+        .to_rotation_matrix()
+        .matrix();
+    let mut six = Matrix6::zeros();
+    six.fixed_view_mut::<3, 3>(0, 0).copy_from(&r);
+    six.fixed_view_mut::<3, 3>(3, 3).copy_from(&r);
+    six
 }

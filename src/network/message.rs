@@ -33,6 +33,12 @@ pub enum Payload {
         /// The part of the load's rate measured over the sender's last step alone.
         #[serde(default)]
         step_rate: StepRate,
+        /// How the sender's rows answer a load on the body, `K = J_bᵀ A⁺ J_b` in the
+        /// body's frame, where they hold it and the scene sends it
+        /// (`Scenario::ghosts_carry_reactions`); `force` and `torque` then leave out
+        /// their answer to the receiver's own border force.
+        #[serde(default)]
+        reaction: Option<Box<nalgebra::Matrix6<f64>>>,
         /// `passive`: the energy the body has put into its port with the receiver so far
         /// [J] (zero under the other schemes, which do not send it).
         energy: f64,
@@ -108,19 +114,18 @@ impl Payload {
 
     /// Number of `f64` values on the wire (rotation only where the scene has it, the
     /// force rates only where the coupling sends them).
-    pub fn floats(&self, rigid: bool, coupling: Coupling, step_rates: bool) -> usize {
+    pub fn floats(
+        &self,
+        rigid: bool,
+        coupling: Coupling,
+        extras: crate::network::tdma::frame::WireExtras,
+    ) -> usize {
         let lines = match self {
             Payload::State { lines, .. } => lines.len(),
             Payload::Force { .. } | Payload::Signal { .. } => 0,
             Payload::Line(_) => 1,
         };
-        crate::network::tdma::frame::floats_per_route(
-            self.kind(),
-            rigid,
-            coupling,
-            step_rates,
-            lines,
-        )
+        crate::network::tdma::frame::floats_per_route(self.kind(), rigid, coupling, extras, lines)
     }
 }
 

@@ -94,6 +94,10 @@ pub struct Node {
     com: Option<ComReference>,
     /// A predicting coupling's momentum account (`partition::momentum`).
     momentum: Option<MomentumAccount>,
+    /// Whether ghosts carry their owners' reaction stiffness
+    /// (`Scenario::ghosts_carry_reactions`).
+    #[serde(default)]
+    reactions: bool,
 }
 
 /// A node's side of the momentum account (`partition::momentum`): what it measures.
@@ -297,6 +301,7 @@ impl Node {
                 .then(|| ComReference::new(scenario)),
             momentum,
             lines: line_ends,
+            reactions: scenario.ghosts_carry_reactions(),
         }
     }
 
@@ -404,6 +409,28 @@ impl Node {
             force += end.load.0;
             torque += end.load.1;
         }
+        // How this node's rows answer a load on the body: the receiver's ghost answers its
+        // own rows' force through it, so the load sent leaves out the answer to the
+        // force the receiver sent (`ΔL = −K M⁻¹ F_r`, added back here).
+        let reaction = self
+            .reactions
+            .then(|| self.system.reaction_of(&self.state, i))
+            .flatten();
+        if let Some(k) = &reaction {
+            let (mut f_r, mut t_r) = (Vector3::zeros(), Vector3::zeros());
+            for h in self
+                .held_forces
+                .iter()
+                .filter(|h| h.body == i && h.from == receiver)
+            {
+                let (f, tq) = self.held_load(h, t);
+                f_r += f;
+                t_r += tq;
+            }
+            let back = self.system.reaction_answer(&self.state, i, k, (f_r, t_r));
+            force += back.0;
+            torque += back.1;
+        }
         let own = self.body_sample(i);
         Payload::State {
             body: g,
@@ -416,6 +443,7 @@ impl Node {
             force_rate,
             torque_rate,
             step_rate,
+            reaction: reaction.map(Box::new),
             energy: self
                 .coupling
                 .ports_in
@@ -508,6 +536,7 @@ impl Node {
                 force_rate,
                 torque_rate,
                 step_rate,
+                reaction,
                 energy,
                 lines,
             } => {
@@ -517,6 +546,9 @@ impl Node {
                 let Some(g) = self.local(*body) else { return };
                 let k = g - self.owned;
                 let rigid = self.state.is_rigid();
+                if self.reactions {
+                    self.system.set_reaction(g, reaction.as_deref().copied());
+                }
                 if let Some(port) = self.coupling.ports_out.get_mut(k) {
                     port.report(*energy);
                 }
@@ -865,6 +897,12 @@ impl Node {
         for (k, (v0, load)) in m.ghost_step.iter().enumerate() {
             let mass = m.ghost_mass[k];
             if self.system.mass.inv_mass[self.owned + k] == 0.0 {
+                continue;
+            }
+            // A ghost carrying its owner's reaction answers this node's rows with its
+            // owner's subsystem, not its own mass: their impulse is booked as applied.
+            if let Some(impulse) = self.system.row_impulse(self.owned + k) {
+                m.ghost_impulse[k] += impulse;
                 continue;
             }
             let dv = self.state.v[self.owned + k] - v0;

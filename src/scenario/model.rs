@@ -784,6 +784,21 @@ impl Scenario {
             && !self.links.is_empty()
     }
 
+    /// Whether a ghost carries its owner's reaction stiffness (`System::set_reaction`):
+    /// exact multipliers on rigid bodies, an exact solve, and a predicting coupling whose
+    /// ghosts integrate. Then a body's owner sends, with its state, how its own rows
+    /// answer a load on it, and the border load without the part that answers the
+    /// receiver's own force (`partition::node`).
+    pub fn ghosts_carry_reactions(&self) -> bool {
+        matches!(self.stabilizer, Stabilizer::Baumgarte { .. })
+            && self.body_model == BodyModel::Rigid
+            && !matches!(self.solver, Solver::ConjugateGradient { .. })
+            && self
+                .partition
+                .as_ref()
+                .is_some_and(|p| p.coupling.predicts() && p.ghosts == GhostMode::Integrate)
+    }
+
     /// The traced FMU outputs' names, `unit.variable`, FMU by FMU in scenario order: the
     /// trace's signal columns and every value list that follows them.
     pub fn signal_names(&self) -> Vec<String> {

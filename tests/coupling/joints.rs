@@ -248,20 +248,23 @@ fn late_speed_of_body_6(v: &Value) -> f64 {
 /// from an inconsistent border (a node's first samples read multipliers it had not
 /// evaluated), the chain at 5 ms ended at 1.0 m/s, the border joint's 1/(4τ) loop
 /// excited; started from the whole model's initial multipliers it ends as the
-/// monolithic run does at 3, 4 and 5 ms. At 8 ms it does not yet: printed, open.
+/// monolithic run does at 3, 4 and 5 ms. At 8 ms the loop still ran it up to 2.5 m/s
+/// until the ghost carried its owner's reaction (method §2.1): now within 1.6× of the
+/// monolithic swing there. 10 and 20 ms are printed.
 #[test]
 fn a_kicked_chain_split_at_a_border_joint_swings_as_the_monolithic_one() {
     let mono = late_speed_of_body_6(&kicked_chain(None));
-    for tau in [0.003, 0.004, 0.005, 0.008] {
+    for tau in [0.003, 0.004, 0.005, 0.008, 0.01, 0.02] {
         let split = late_speed_of_body_6(&kicked_chain(Some(tau)));
         eprintln!(
             "kicked chain, predict at τ = {} ms: body 6 up to {split:.3e} m/s over the last \
              second (monolithic {mono:.3e} m/s)",
             tau * 1e3
         );
-        if tau <= 0.005 {
+        let within = if tau <= 0.005 { 1.5 } else { 2.0 };
+        if tau <= 0.008 {
             assert!(
-                split < 1.5 * mono && split > mono / 1.5,
+                split < within * mono && split > mono / within,
                 "τ = {tau}: {split} m/s against {mono} m/s"
             );
         }
@@ -812,7 +815,11 @@ fn a_bead_sliding_on_a_rod_across_a_border_follows_the_monolithic_run() {
             .map(|(a, b)| (a - b).norm())
             .fold(0.0, f64::max);
         let l0 = split.1[0];
-        let dl = split.1.iter().map(|l| ((l - l0) / l0).abs()).fold(0.0, f64::max);
+        let dl = split
+            .1
+            .iter()
+            .map(|l| ((l - l0) / l0).abs())
+            .fold(0.0, f64::max);
         let out = split.0.last().map_or(0.0, |p| p.norm());
         eprintln!(
             "bead on a rod split at τ = {} ms: out to {out:.3} m, {apart:.3e} m from \
@@ -821,7 +828,10 @@ fn a_bead_sliding_on_a_rod_across_a_border_follows_the_monolithic_run() {
             100.0 * dl
         );
         if tau <= 0.005 {
-            assert!(apart <= 1e-2, "τ = {tau}: {apart} m from the monolithic run");
+            assert!(
+                apart <= 1e-2,
+                "τ = {tau}: {apart} m from the monolithic run"
+            );
             assert!(dl <= 0.01, "τ = {tau}: L_z moved by {dl}");
         }
     }

@@ -83,13 +83,14 @@ pub const MOMENTUM_FLOATS: usize = 3;
 /// force, the impulse on the sender's ghost (three values), and the `passive` one its
 /// energy report (one value). Such a coupling's frame also carries its sender's
 /// momentum account once ([`MOMENTUM_FLOATS`]). Where it sends step rates
-/// (`step_rates`: exact multipliers' slopes, `network::StepRate`) a force or state adds
-/// one more per force and torque value.
+/// ([`WireExtras::step_rates`]) a force or state adds one more per force and torque
+/// value, and where ghosts carry reactions ([`WireExtras::reactions`]) a state adds the
+/// reaction stiffness ([`REACTION_FLOATS`]).
 pub fn floats_per_route(
     kind: DataKind,
     rigid: bool,
     coupling: Coupling,
-    step_rates: bool,
+    extras: WireExtras,
     lines: usize,
 ) -> usize {
     // A transmission line's sample: wave and window length, and on a force route the
@@ -114,15 +115,32 @@ pub fn floats_per_route(
         (DataKind::Force, true) => 6,
         (DataKind::Signal, _) => 1,
     };
-    let rates = match (coupling.predicts(), step_rates) {
+    let rates = match (coupling.predicts(), extras.step_rates) {
         (false, _) => 0,
         (true, false) => loads,
         (true, true) => 2 * loads,
     };
     let energy = usize::from(coupling.tank().is_some());
     let impulse = if kind == DataKind::Force { impulse } else { 0 };
-    base + rates + energy + impulse + lines * 2
+    let reaction = if kind == DataKind::State && extras.reactions {
+        REACTION_FLOATS
+    } else {
+        0
+    };
+    base + rates + energy + impulse + reaction + lines * 2
 }
+
+/// What a scene's border messages carry beyond its coupling's own values.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct WireExtras {
+    /// Exact multipliers' slopes as step rates (`Scenario::slopes_multipliers`).
+    pub step_rates: bool,
+    /// A ghost's reaction stiffness with its state (`Scenario::ghosts_carry_reactions`).
+    pub reactions: bool,
+}
+
+/// The values of a reaction stiffness on the wire: a symmetric 6 × 6 matrix.
+pub const REACTION_FLOATS: usize = 21;
 
 /// The sending TDMA nodes of each channel (sorted, without repeats), from its routes.
 pub fn senders(channels: &[Channel]) -> Vec<Vec<usize>> {
@@ -185,7 +203,7 @@ impl FrameSizes {
     /// coupling's frame its sender's momentum account ([`MOMENTUM_FLOATS`]).
     pub fn from_channels(
         channels: &[Channel],
-        (rigid, coupling, step_rates): (bool, Coupling, bool),
+        (rigid, coupling, extras): (bool, Coupling, WireExtras),
         header_bytes: u64,
         lines: &dyn Fn(&Route) -> usize,
     ) -> FrameSizes {
@@ -193,7 +211,7 @@ impl FrameSizes {
         for (c, ch) in channels.iter().enumerate() {
             for r in &ch.routes {
                 *floats.entry((tdma_node(r.from), c)).or_default() +=
-                    floats_per_route(r.kind, rigid, coupling, step_rates, lines(r));
+                    floats_per_route(r.kind, rigid, coupling, extras, lines(r));
             }
         }
         let account = if coupling.predicts() {
@@ -322,28 +340,78 @@ mod tests {
                 },
             },
         );
-        assert_eq!(floats_per_route(DataKind::State, false, r, false, 0), 9);
-        assert_eq!(floats_per_route(DataKind::State, true, r, false, 0), 19);
-        assert_eq!(floats_per_route(DataKind::Force, false, r, false, 0), 3);
-        assert_eq!(floats_per_route(DataKind::Force, true, r, false, 0), 6);
+        assert_eq!(
+            floats_per_route(DataKind::State, false, r, WireExtras::default(), 0),
+            9
+        );
+        assert_eq!(
+            floats_per_route(DataKind::State, true, r, WireExtras::default(), 0),
+            19
+        );
+        assert_eq!(
+            floats_per_route(DataKind::Force, false, r, WireExtras::default(), 0),
+            3
+        );
+        assert_eq!(
+            floats_per_route(DataKind::Force, true, r, WireExtras::default(), 0),
+            6
+        );
         // A predicting coupling's force also carries the impulse on the sender's ghost
         // (3 values).
-        assert_eq!(floats_per_route(DataKind::State, false, p, false, 0), 12);
-        assert_eq!(floats_per_route(DataKind::State, true, p, false, 0), 25);
-        assert_eq!(floats_per_route(DataKind::Force, false, p, false, 0), 9);
-        assert_eq!(floats_per_route(DataKind::Force, true, p, false, 0), 15);
-        assert_eq!(floats_per_route(DataKind::State, false, e, false, 0), 13);
-        assert_eq!(floats_per_route(DataKind::Force, true, e, false, 0), 16);
+        assert_eq!(
+            floats_per_route(DataKind::State, false, p, WireExtras::default(), 0),
+            12
+        );
+        assert_eq!(
+            floats_per_route(DataKind::State, true, p, WireExtras::default(), 0),
+            25
+        );
+        assert_eq!(
+            floats_per_route(DataKind::Force, false, p, WireExtras::default(), 0),
+            9
+        );
+        assert_eq!(
+            floats_per_route(DataKind::Force, true, p, WireExtras::default(), 0),
+            15
+        );
+        assert_eq!(
+            floats_per_route(DataKind::State, false, e, WireExtras::default(), 0),
+            13
+        );
+        assert_eq!(
+            floats_per_route(DataKind::Force, true, e, WireExtras::default(), 0),
+            16
+        );
         // A line: 2 values more per line on a state route; its own sample (and the
         // owner end's impulse) on a force route.
-        assert_eq!(floats_per_route(DataKind::State, false, e, false, 2), 17);
-        assert_eq!(floats_per_route(DataKind::Force, false, e, false, 1), 11);
-        assert_eq!(floats_per_route(DataKind::Force, false, r, false, 1), 8);
+        assert_eq!(
+            floats_per_route(DataKind::State, false, e, WireExtras::default(), 2),
+            17
+        );
+        assert_eq!(
+            floats_per_route(DataKind::Force, false, e, WireExtras::default(), 1),
+            11
+        );
+        assert_eq!(
+            floats_per_route(DataKind::Force, false, r, WireExtras::default(), 1),
+            8
+        );
         // Exact multipliers' step rates: one more per force and torque value where the
         // coupling sends rates, none where it does not.
-        assert_eq!(floats_per_route(DataKind::Force, true, p, true, 0), 21);
-        assert_eq!(floats_per_route(DataKind::State, true, p, true, 0), 31);
-        assert_eq!(floats_per_route(DataKind::Force, true, r, true, 0), 6);
+        let steps = WireExtras {
+            step_rates: true,
+            reactions: false,
+        };
+        assert_eq!(floats_per_route(DataKind::Force, true, p, steps, 0), 21);
+        assert_eq!(floats_per_route(DataKind::State, true, p, steps, 0), 31);
+        assert_eq!(floats_per_route(DataKind::Force, true, r, steps, 0), 6);
+        // A ghost's reaction stiffness rides its state, not a force.
+        let both = WireExtras {
+            step_rates: true,
+            reactions: true,
+        };
+        assert_eq!(floats_per_route(DataKind::State, true, p, both, 0), 52);
+        assert_eq!(floats_per_route(DataKind::Force, true, p, both, 0), 21);
     }
 
     #[test]
