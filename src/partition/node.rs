@@ -98,6 +98,11 @@ pub struct Node {
     /// (`Scenario::ghosts_carry_reactions`).
     #[serde(default)]
     reactions: bool,
+    /// Per ghost: whether rows of another node hold its body (its owner's load on it
+    /// then answers this node's force, and a slope carried across a sample's age would
+    /// close the loop of method §2.1 through it).
+    #[serde(default)]
+    held_elsewhere: Vec<bool>,
 }
 
 /// A node's side of the momentum account (`partition::momentum`): what it measures.
@@ -302,6 +307,18 @@ impl Node {
             momentum,
             lines: line_ends,
             reactions: scenario.ghosts_carry_reactions(),
+            held_elsewhere: layout.ghosts[index]
+                .iter()
+                .map(|&g| {
+                    (0..layout.nodes).filter(|&n| n != index).any(|n| {
+                        layout.links[n].iter().any(|&l| {
+                            let link = &scenario.links[l];
+                            (link.a == g || (!link.world && link.b == g))
+                                && layout.link_owner[l] == n
+                        })
+                    })
+                })
+                .collect(),
         }
     }
 
@@ -498,6 +515,22 @@ impl Node {
                 sum.step_torque_rate += row.step_torque_rate;
             }
         }
+        // A body no other node's row holds answers this force with its own mass alone:
+        // no loop runs through it, and the slopes are carried across the age as rates.
+        let mut step_rate = StepRate {
+            force: sum.step_force_rate,
+            torque: sum.step_torque_rate,
+        };
+        let loop_free = !self
+            .held_elsewhere
+            .get(body - self.owned)
+            .copied()
+            .unwrap_or(true);
+        if loop_free {
+            sum.force_rate += step_rate.force;
+            sum.torque_rate += step_rate.torque;
+            step_rate = StepRate::default();
+        }
         Payload::Force {
             link: l,
             body: g,
@@ -505,10 +538,7 @@ impl Node {
             torque: sum.torque,
             force_rate: sum.force_rate,
             torque_rate: sum.torque_rate,
-            step_rate: StepRate {
-                force: sum.step_force_rate,
-                torque: sum.step_torque_rate,
-            },
+            step_rate,
             impulse: self
                 .momentum
                 .as_ref()

@@ -412,9 +412,9 @@ fn a_free_chain_split_at_a_border_joint_keeps_its_invariants() {
 
 /// The double pendulum released horizontal (a chaotic swing of about 20 J), split at
 /// its middle joint, under `predict` and the default `passive`: at 5 ms its energy stays
-/// within 2 J of the monolithic run's (the exact law: 0.88 J, and 0.93 J at 6 ms; the SMC law by name:
+/// within 2 J of the monolithic run's (the exact law: 0.44 J, and 0.79 J at 6 ms; the SMC law by name:
 /// 2.01 J against its own monolithic 1.98 J). At 20 ms it stays bounded, but its energy
-/// moves 21–33 J under the exact law and 35–55 J under SMC: printed, open (method
+/// moves 43–51 J under the exact law and 35–55 J under SMC: printed, open (method
 /// §2.1).
 #[test]
 fn a_double_pendulum_split_at_its_middle_joint_keeps_its_energy_under_delay() {
@@ -444,7 +444,7 @@ fn a_double_pendulum_split_at_its_middle_joint_keeps_its_energy_under_delay() {
                  monolithic over 3 s, energy drift {drift:.3e} J (monolithic {mono_drift:.3e} J)",
                 tau * 1e3,
             );
-            // The exact law holds to 6 ms (0.93 J; 3.1 J at 8 ms, method §2.1), SMC to 5.
+            // The exact law holds to 6 ms (0.79 J; 2.5 J at 8 ms, method §2.1), SMC to 5.
             if tau <= 0.005 || (tau <= 0.006 && law.is_null()) {
                 assert!(
                     (drift - mono_drift).abs() <= 2.0,
@@ -467,7 +467,7 @@ fn platform_and_rotor(split: Option<f64>) -> Value {
 /// at 1 and 5 ms. (The hinge's alignment rows turn with the rotor's spin and their
 /// multipliers change to keep the couple steady: sent without the multipliers' slope,
 /// the couple the rotor felt turned at its spin, and |L| drifted 12.5 % at 5 ms.) At
-/// 20 ms the axes come 0.53 rad apart and |L| drifts 41 %: printed, open (method §2.1).
+/// 20 ms the axes stay together while |L| drifts 4.5 %: printed, open (method §2.1).
 #[test]
 fn a_hinge_across_a_partition_keeps_its_axes_and_the_invariants() {
     let (p0, l0, e0) = drifts(&platform_and_rotor(None));
@@ -497,8 +497,10 @@ fn a_hinge_across_a_partition_keeps_its_axes_and_the_invariants() {
             100.0 * l0,
             100.0 * e0
         );
+        // At 20 ms the axes stay together (3.6e-3 rad measured) while |L| and the
+        // kinetic energy drift 4.5 % and +2.3 %, just outside the targets: printed.
+        assert!(axes.0 <= 1e-2, "τ = {tau}: axes {} rad apart", axes.0);
         if tau <= 0.005 {
-            assert!(axes.0 <= 1e-2, "τ = {tau}: axes {} rad apart", axes.0);
             assert!(p <= 1.0, "τ = {tau}: |ΔP| {p}");
             assert!((l - l0).abs() <= 0.03, "τ = {tau}: |ΔL|/|L| {l} vs {l0}");
             assert!(
@@ -655,9 +657,10 @@ fn a_closed_loop_split_across_a_border_keeps_its_energy() {
     for tau in [0.001, 0.005] {
         let (drift, _) = energy(&scene(Some(tau)));
         eprintln!("closed loop split at τ = {} ms: energy within {drift:.3e} J (monolithic {mono:.3e} J, swing {swing:.2} J)", tau * 1e3);
-        // Met at one step of delay (0.7 % measured); 5 ms moves 0.55 J, 10 % of the
-        // swing: printed, open (method §2.1).
-        if tau <= 0.001 {
+        // 2.7e-4 and 6.2e-3 J measured: the coupler, which no row of its own node holds,
+        // receives its hinges' forces with their multipliers' slopes as rates (0.037 and
+        // 0.55 J when they were carried one step only).
+        if tau <= 0.005 {
             assert!(
                 drift <= mono + 0.05 * swing,
                 "τ = {tau}: energy moved {drift} J of a {swing} J swing"
