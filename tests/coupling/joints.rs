@@ -839,3 +839,57 @@ fn a_bead_sliding_on_a_rod_across_a_border_follows_the_monolithic_run() {
         }
     }
 }
+
+/// The double pendulum of links (`pendulum2.json`: a 1e9 kg pivot, two 1 kg bobs on
+/// 1 m links pushed by 9.81 N, RK4, the outer bob on its own node) against its
+/// monolithic run: at 5 ms (latency = τ) its energy drifts within 1 J of the
+/// monolithic run's (the SMC law's own drift) and its bobs stay within 1e-2 m; at 20 ms
+/// it stays bounded.
+#[test]
+fn a_double_pendulum_of_links_split_at_its_outer_link_keeps_its_energy() {
+    #[derive(Default)]
+    struct Swing(Vec<[Vector3<f64>; 2]>, Vec<f64>);
+    impl Observer for Swing {
+        fn on_step(&mut self, s: &StepValues) -> std::io::Result<()> {
+            self.0.push([s.p[1], s.p[2]]);
+            // The pushes' potential: 9.81 N along −y on each bob.
+            self.1
+                .push(s.invariants().kinetic_energy + G * (s.p[1].y + s.p[2].y));
+            Ok(())
+        }
+    }
+    let run = |v: &Value| {
+        let mut s = Swing::default();
+        CoSim::new(&scenario(v))
+            .run_to_end(&mut s)
+            .unwrap_or_else(|e| panic!("{e}"));
+        s
+    };
+    let drift = |s: &Swing| s.1.iter().map(|e| (e - s.1[0]).abs()).fold(0.0, f64::max);
+    let mono = run(&shipped_split("pendulum2", None));
+    for tau in [0.005, 0.02] {
+        let split = run(&shipped_split("pendulum2", Some(tau)));
+        let apart = mono
+            .0
+            .iter()
+            .zip(&split.0)
+            .map(|(a, b)| (a[0] - b[0]).norm().max((a[1] - b[1]).norm()))
+            .fold(0.0, f64::max);
+        eprintln!(
+            "link double pendulum at τ = {} ms: energy drift {:.3} J (monolithic {:.3} J), \
+             bobs within {apart:.3e} m",
+            tau * 1e3,
+            drift(&split),
+            drift(&mono)
+        );
+        if tau <= 0.005 {
+            assert!(
+                (drift(&split) - drift(&mono)).abs() <= 1.0,
+                "energy drift {} J against {} J",
+                drift(&split),
+                drift(&mono)
+            );
+            assert!(apart <= 1e-2, "{apart} m from the monolithic run");
+        }
+    }
+}
