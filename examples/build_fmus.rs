@@ -1,6 +1,6 @@
-//! Builds the test FMUs (`tests/fmus/`: msd, pd, faulty, and msd3, msd in FMI 3.0 form)
-//! into a directory, for the example scenarios that couple FMUs and for checking them with
-//! other FMI tools:
+//! Builds the test FMUs (`tests/fmus/`: msd, pd, faulty, quirks, and msd3, msd in FMI 3.0
+//! form) into a directory, for the example scenarios that couple FMUs and for checking them
+//! with other FMI tools:
 //!
 //! ```text
 //! cargo run --release --example build_fmus -- OUTDIR

@@ -47,6 +47,7 @@ pub mod fmi2;
 pub mod fmi3;
 pub mod instance;
 pub mod loaded;
+pub mod log;
 
 use std::path::PathBuf;
 
@@ -56,6 +57,7 @@ pub use description::{
 };
 pub use instance::{FmuState, Instance};
 pub use loaded::Fmu;
+pub use log::{FmuLog, LogEntry};
 
 /// Everything that can go wrong while unpacking, describing, loading or driving an FMU.
 #[derive(Debug, thiserror::Error)]

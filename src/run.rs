@@ -655,7 +655,9 @@ fn write_summary(out: &Path, run: &Ran) -> Result<()> {
         summary["fmus"] = scenario
             .fmus
             .iter()
-            .map(|f| {
+            .enumerate()
+            .map(|(i, f)| {
+                let (messages, not_kept) = world.fmu_messages(i);
                 json!({
                     "name": f.name,
                     "path": f.path.display().to_string(),
@@ -666,6 +668,8 @@ fn write_summary(out: &Path, run: &Ran) -> Result<()> {
                     "generation_tool": f.generation_tool,
                     "node": f.node + 1,
                     "step": f.step.as_secs_f64(),
+                    "messages": messages,
+                    "messages_not_kept": not_kept,
                 })
             })
             .collect();

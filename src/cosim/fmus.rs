@@ -89,6 +89,12 @@ impl FmuUnit {
         self.live.is_some()
     }
 
+    /// What the FMU logged at warning and above, and how many such messages were not
+    /// kept; nothing before it was loaded.
+    pub fn messages(&self) -> (Vec<crate::fmu::LogEntry>, u64) {
+        self.fmu.as_ref().map(|f| f.messages()).unwrap_or_default()
+    }
+
     /// Output `k` as channels and the trace see it.
     pub fn output(&self, k: usize) -> f64 {
         self.published[k]
@@ -134,6 +140,9 @@ impl FmuUnit {
                 Arc::new(f)
             }
         };
+        // Kept before the instance is made, so what the FMU logs while failing to
+        // instantiate or initialize reaches summary.json.
+        self.fmu = Some(Arc::clone(&fmu));
         self.output_vrs = spec.outputs.iter().map(|v| v.vr).collect();
         self.input_vrs = spec.inputs.iter().map(|v| v.vr).collect();
         let mut inst = fmu
@@ -161,7 +170,6 @@ impl FmuUnit {
                 self.published.copy_from_slice(&self.pending);
             }
         }
-        self.fmu = Some(fmu);
         self.live = Some(Mutex::new(inst));
         Ok(())
     }

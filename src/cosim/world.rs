@@ -459,6 +459,13 @@ impl CoSim {
             .collect()
     }
 
+    /// What FMU `f` logged at warning and above (every instance of it, this world's and
+    /// its forks'), and how many such messages were not kept
+    /// ([`crate::fmu::log`]); nothing before it was loaded.
+    pub fn fmu_messages(&self, f: usize) -> (Vec<crate::fmu::LogEntry>, u64) {
+        self.fmus[f].messages()
+    }
+
     /// The channels.
     pub fn channels(&self) -> &[Channel] {
         &self.channels

@@ -99,12 +99,58 @@ pub struct CallbackFunctions {
 pub struct LogTarget {
     /// The instance's name, the prefix of every message.
     pub instance: String,
-    /// Print messages (`loggingOn` of `fmi2Instantiate`); off: silent.
+    /// Print every message (`loggingOn` of `fmi2Instantiate`); off: only those of
+    /// status warning and worse, which are always printed and kept.
     pub on: bool,
+    /// The FMU's name, for the printed warnings.
+    pub fmu: String,
+    /// Where messages of status warning and worse are kept ([`super::log`]).
+    pub log: super::log::SharedLog,
+}
+
+impl LogTarget {
+    /// One message the FMU logged with `status` (its C name `status_name`): printed
+    /// when logging is on, and if of status warning or worse kept and, the first time,
+    /// printed as a warning ([`super::log::keep`]).
+    pub(crate) fn message(
+        &self,
+        instance: String,
+        (status, status_name): (Status, &'static str),
+        category: String,
+        message: String,
+    ) {
+        if self.on {
+            let _ = writeln!(
+                std::io::stderr(),
+                "[{instance}] {status_name} {category}: {message}"
+            );
+        }
+        // The codes OK, Warning, Discard, Error, Fatal are the same in FMI 2.0 and 3.0:
+        // everything but OK (an out-of-range status too) is a warning or worse.
+        if status != OK {
+            let entry = (instance, status_name, category, message);
+            super::log::keep(&self.log, &self.fmu, entry, self.on);
+        }
+    }
+}
+
+/// The text of a C string the FMU passed (empty for null).
+///
+/// # Safety
+/// `p` is null or NUL-terminated.
+pub(crate) unsafe fn text(p: *const c_char) -> String {
+    if p.is_null() {
+        String::new()
+    } else {
+        // SAFETY: non-null and NUL-terminated by the caller's contract.
+        unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned()
+    }
 }
 
 /// The logger: prints `[instance] status category: message` to stderr when the
-/// instance's logging is on. Never unwinds (a write error is ignored).
+/// instance's logging is on, and keeps and prints every message of status warning and
+/// worse whether or not it is ([`LogTarget::message`]). Never unwinds (a write error is
+/// ignored).
 ///
 /// # Safety
 /// `env` is null or points at a live [`LogTarget`]; the strings are null or
@@ -120,29 +166,14 @@ pub unsafe extern "C" fn log_message(
     let Some(target) = (unsafe { env.cast::<LogTarget>().as_ref() }) else {
         return;
     };
-    if !target.on {
-        return;
-    }
-    let text = |p: *const c_char| {
-        if p.is_null() {
-            String::new()
-        } else {
-            // SAFETY: non-null and NUL-terminated by the caller's contract.
-            unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned()
-        }
-    };
+    // SAFETY (all three): null or NUL-terminated by the caller's contract.
     let name = if instance.is_null() {
         target.instance.clone()
     } else {
-        text(instance)
+        unsafe { text(instance) }
     };
-    let _ = writeln!(
-        std::io::stderr(),
-        "[{name}] {} {}: {}",
-        status_name(status),
-        text(category),
-        text(message)
-    );
+    let (category, message) = unsafe { (text(category), text(message)) };
+    target.message(name, (status, status_name(status)), category, message);
 }
 
 /// The callback table for an instance whose logger target is `env`.

@@ -15,8 +15,7 @@
 //! `fmi3EnterInitializationMode`), and `fmi3DoStep` reports through out-parameters
 //! whether the FMU wants the simulation to end.
 
-use std::ffi::{c_char, c_void, CStr};
-use std::io::Write;
+use std::ffi::{c_char, c_void};
 
 use libloading::Library;
 
@@ -75,7 +74,8 @@ pub type LogMessage = unsafe extern "C" fn(
 );
 
 /// The log callback: prints `[instance] status category: message` to stderr when the
-/// instance's logging is on. `env` is the instance's [`super::fmi2::LogTarget`] (shared
+/// instance's logging is on, and keeps and prints every message of status warning and
+/// worse whether or not it is ([`super::fmi2::LogTarget::message`]). `env` is the instance's [`super::fmi2::LogTarget`] (shared
 /// with FMI 2.0: it holds the instance's name, which FMI 3.0 no longer passes). Never
 /// unwinds (a write error is ignored).
 ///
@@ -92,24 +92,13 @@ pub unsafe extern "C" fn log_message(
     let Some(target) = (unsafe { env.cast::<super::fmi2::LogTarget>().as_ref() }) else {
         return;
     };
-    if !target.on {
-        return;
-    }
-    let text = |p: *const c_char| {
-        if p.is_null() {
-            String::new()
-        } else {
-            // SAFETY: non-null and NUL-terminated by the caller's contract.
-            unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned()
-        }
-    };
-    let _ = writeln!(
-        std::io::stderr(),
-        "[{}] {} {}: {}",
-        target.instance,
-        status_name(status),
-        text(category),
-        text(message)
+    // SAFETY (both): null or NUL-terminated by the caller's contract.
+    let (category, message) = unsafe { (super::fmi2::text(category), super::fmi2::text(message)) };
+    target.message(
+        target.instance.clone(),
+        (status, status_name(status)),
+        category,
+        message,
     );
 }
 

@@ -247,6 +247,8 @@ impl Instance {
         let log = Box::into_raw(Box::new(LogTarget {
             instance: instance_name.to_string(),
             on: logging,
+            fmu: shared.name.clone(),
+            log: Arc::clone(&shared.log),
         }));
         let (component, callbacks, function) = match shared.api {
             Api::Fmi2(f) => {

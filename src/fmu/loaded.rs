@@ -40,6 +40,8 @@ pub(crate) struct Loaded {
     pub(crate) resource_path: CString,
     /// Live instances (for `canBeInstantiatedOnlyOncePerProcess`).
     pub(crate) instances: AtomicUsize,
+    /// What every instance logged at warning and above ([`super::log`]).
+    pub(crate) log: super::log::SharedLog,
     _library: Library,
     unpacked: Unpacked,
 }
@@ -134,6 +136,7 @@ impl Fmu {
                 resource_uri,
                 resource_path,
                 instances: AtomicUsize::new(0),
+                log: super::log::SharedLog::default(),
                 _library: library,
                 unpacked,
             }),
@@ -171,6 +174,13 @@ impl Fmu {
     /// passed to `fmi3InstantiateCoSimulation` (FMI 3.0 takes a path, not a URI).
     pub fn resource_path(&self) -> &str {
         self.shared.resource_path.to_str().unwrap_or_default()
+    }
+
+    /// The messages its instances logged at warning and above, as summary.json keeps
+    /// them ([`super::log`]): the kept ones and how many were not kept.
+    pub fn messages(&self) -> (Vec<super::LogEntry>, u64) {
+        let log = self.shared.log.lock().unwrap_or_else(|p| p.into_inner());
+        (log.entries().to_vec(), log.not_kept())
     }
 
     /// Where the FMU is unpacked (removed when the FMU and all its instances are gone).

@@ -212,7 +212,8 @@ pub struct FmuFile {
         skip_serializing_if = "Option::is_none"
     )]
     pub trace: Option<Vec<String>>,
-    /// Print the FMU's log messages on stderr; default `false`.
+    /// Print every log message of the FMU on stderr; off, those of status warning and worse
+    /// are still printed (and kept in summary.json); default `false`.
     #[serde(default)]
     pub logging: bool,
 }

@@ -18,5 +18,6 @@ mod forks;
 mod loading;
 mod logging;
 mod own_fmu;
+mod quirks;
 mod states;
 mod status;

@@ -8,7 +8,12 @@
  *                            canSerializeFMUstate (a state is a copy of ModelData,
  *                            serialized as its bytes), else 0
  *   ModelData                a struct of its variables with a `double time` member
- * and, after including it, the model_* functions declared below.
+ * and, after including it, the model_* functions declared below. Optionally:
+ *   MODEL_REFUSES_STATE(in)  an expression true when fmi2GetFMUstate must fail (a model
+ *                            whose state saving breaks; default: never)
+ * A model asks to stop by setting `in->terminated` and returning fmi2Discard from
+ * model_do_step after completing the step: fmi2GetBooleanStatus(fmi2Terminated) then
+ * answers true and the time advances to the step's end.
  */
 #ifndef DSMCOSIM_FMI2_CS_FUNCTIONS_H
 #define DSMCOSIM_FMI2_CS_FUNCTIONS_H
@@ -26,7 +31,12 @@ typedef struct {
     char *name;
     Mode mode;
     int logging;
+    int terminated; /* the model asked to end the simulation */
 } Instance;
+
+#ifndef MODEL_REFUSES_STATE
+#define MODEL_REFUSES_STATE(in) 0
+#endif
 
 /* What each model provides. */
 static void model_defaults(ModelData *d);
@@ -150,6 +160,7 @@ fmi2Status fmi2Reset(fmi2Component c) {
     if (in == NULL) return fmi2Error;
     model_defaults(&in->d);
     in->mode = MODE_INSTANTIATED;
+    in->terminated = 0;
     return fmi2OK;
 }
 
@@ -231,6 +242,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state) {
     ModelData *copy;
     if (in == NULL || state == NULL) return fmi2Error;
     if (!MODEL_CAN_GET_SET_STATE) return refuse(in, "this FMU cannot save its state");
+    if (MODEL_REFUSES_STATE(in)) return refuse(in, "the model refuses to save its state");
     copy = (ModelData *)*state;
     if (copy == NULL) copy = (ModelData *)in->cb.allocateMemory(1, sizeof(ModelData));
     if (copy == NULL) return refuse(in, "out of memory");
@@ -330,8 +342,10 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
     if (in == NULL) return fmi2Error;
     if (in->mode != MODE_STEP) return refuse(in, "fmi2DoStep outside step mode");
     if (!(communicationStepSize > 0.0)) return refuse(in, "fmi2DoStep with a step size <= 0");
+    if (in->terminated) return refuse(in, "fmi2DoStep after the model asked to terminate");
     s = model_do_step(in, currentCommunicationPoint, communicationStepSize);
-    if (s == fmi2OK) in->d.time = currentCommunicationPoint + communicationStepSize;
+    if (s == fmi2OK || (s == fmi2Discard && in->terminated))
+        in->d.time = currentCommunicationPoint + communicationStepSize;
     return s;
 }
 
@@ -360,7 +374,7 @@ fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Int
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
     Instance *in = (Instance *)c;
     if (in == NULL || value == NULL || s != fmi2Terminated) return fmi2Discard;
-    *value = fmi2False;
+    *value = in->terminated ? fmi2True : fmi2False;
     return fmi2OK;
 }
 

@@ -11,7 +11,7 @@ use std::process::Command;
 
 /// The test FMUs under `tests/fmus/`: each `<stem>.c` with its `<stem>.xml`; the stem
 /// is also the model identifier. `msd3` is msd in FMI 3.0 form.
-pub const TEST_FMUS: [&str; 4] = ["msd", "pd", "faulty", "msd3"];
+pub const TEST_FMUS: [&str; 5] = ["msd", "pd", "faulty", "msd3", "quirks"];
 
 /// Where a test reads shipped scenario `file` from: the file itself, or, for a scene with
 /// FMUs (which reads `fmu/*.fmu` beside it, built for users by `cargo run --example

@@ -1,0 +1,135 @@
+//! What a real FMU does besides computing, with `quirks.fmu` (`tests/fmus/quirks.c`)
+//! doing each at a set time: the messages it logs are printed and kept in summary.json
+//! (bounded), and a request to stop ends the run normally.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use serde_json::{json, Value};
+
+use crate::fmu_build::build_test_fmu;
+use crate::fmus::scratch;
+
+/// `quirks.fmu` as `q` alone for `duration` [s] at dt = 1 ms, its parameters `start`.
+fn alone(duration: f64, start: Value) -> Value {
+    json!({
+        "name": "quirks", "seed": 1, "duration": duration, "dt": 0.001,
+        "fmus": [{"name": "q", "path": "quirks.fmu", "start": start, "trace": ["x", "v"]}]
+    })
+}
+
+/// Runs `scenario` from `dir` (where quirks.fmu is built) with `dsmcosim run`; its output
+/// directory, the process's output and summary.json (null when none was written).
+fn run(dir: &Path, scenario: &Value) -> (PathBuf, Output, Value) {
+    if !dir.join("quirks.fmu").exists() {
+        build_test_fmu("quirks", dir).expect("build quirks.fmu");
+    }
+    let path = dir.join("scenario.json");
+    std::fs::write(&path, scenario.to_string()).unwrap();
+    let out = dir.join("out");
+    let o = Command::new(env!("CARGO_BIN_EXE_dsmcosim"))
+        .args([
+            "run",
+            path.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .expect("run dsmcosim");
+    let summary = std::fs::read(out.join("summary.json"))
+        .map(|b| serde_json::from_slice(&b).expect("summary.json is JSON"))
+        .unwrap_or(Value::Null);
+    (out, o, summary)
+}
+
+/// The lines of `stderr` that print a message the FMU logged.
+fn logged_lines(stderr: &str) -> Vec<&str> {
+    stderr
+        .lines()
+        .filter(|l| l.starts_with("warning: FMU 'q' logged fmi2"))
+        .collect()
+}
+
+#[test]
+fn an_fmus_error_message_is_printed_and_kept_though_its_logging_is_off() {
+    let dir = scratch("fmu-quirks", "error-message");
+    let (_, o, summary) = run(
+        &dir,
+        &alone(0.2, json!({"warn_from": 0.1, "fail_at": 0.15})),
+    );
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{stderr}");
+    let why = "Failed to open resource file table.csv: no data past fail_at";
+    assert!(
+        stderr.contains(&format!(
+            "warning: FMU 'q' logged fmi2Error (logStatusError): {why}"
+        )),
+        "{stderr}"
+    );
+    // The FMU's reason comes before the run's own error, which names the call.
+    let reason = stderr.find(why).unwrap();
+    let error = stderr
+        .find("fmi2DoStep returned fmi2Error")
+        .expect("the run's error");
+    assert!(reason < error, "{stderr}");
+    let messages = summary["fmus"][0]["messages"].as_array().expect("messages");
+    let error_entry = messages
+        .iter()
+        .find(|m| m["status"] == "fmi2Error")
+        .expect("the error is kept");
+    assert_eq!(error_entry["message"], why);
+    assert_eq!(error_entry["category"], "logStatusError");
+    assert_eq!(error_entry["instance"], "q");
+    assert_eq!(error_entry["count"], 1);
+    // Every warning (one per step from warn_from to fail_at, each naming its step's end)
+    // is printed once and kept once.
+    let warnings: Vec<&Value> = messages
+        .iter()
+        .filter(|m| m["status"] == "fmi2Warning")
+        .collect();
+    assert!((50..=51).contains(&warnings.len()), "{}", warnings.len());
+    let lines = logged_lines(&stderr);
+    assert_eq!(lines.len(), warnings.len() + 1, "{stderr}");
+    for w in &warnings {
+        let text = w["message"].as_str().unwrap();
+        assert!(text.starts_with("step to t = 0.1"), "{text}");
+        assert_eq!(
+            lines.iter().filter(|l| l.ends_with(text)).count(),
+            1,
+            "{text}"
+        );
+    }
+    assert_eq!(summary["fmus"][0]["messages_not_kept"], 0);
+}
+
+#[test]
+fn an_fmu_logging_at_every_step_is_kept_to_its_bound() {
+    let dir = scratch("fmu-quirks", "message-bound");
+    let (_, o, summary) = run(&dir, &alone(0.2, json!({"warn_from": 0.0})));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{stderr}");
+    let bound = dsmcosim::fmu::log::MAX_KEPT_MESSAGES;
+    // 200 steps, each warning with its own text: the first `bound` printed and kept,
+    // the rest counted, and the cap said once.
+    assert_eq!(logged_lines(&stderr).len(), bound, "{stderr}");
+    assert_eq!(
+        stderr
+            .matches("logged more than 64 distinct messages")
+            .count(),
+        1,
+        "{stderr}"
+    );
+    let fmu = &summary["fmus"][0];
+    assert_eq!(fmu["messages"].as_array().unwrap().len(), bound);
+    assert_eq!(fmu["messages_not_kept"], 200 - bound as u64);
+}
+
+#[test]
+fn a_quiet_fmu_keeps_no_message() {
+    let dir = scratch("fmu-quirks", "quiet");
+    let (_, o, summary) = run(&dir, &alone(0.05, json!({})));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{stderr}");
+    assert!(logged_lines(&stderr).is_empty(), "{stderr}");
+    assert_eq!(summary["fmus"][0]["messages"], json!([]));
+}
