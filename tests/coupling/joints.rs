@@ -470,43 +470,62 @@ fn platform_and_rotor(split: Option<f64>) -> Value {
 /// 20 ms the axes stay together while |L| drifts 4.5 %: printed, open (method §2.1).
 #[test]
 fn a_hinge_across_a_partition_keeps_its_axes_and_the_invariants() {
-    let (p0, l0, e0) = drifts(&platform_and_rotor(None));
-    for tau in [0.001, 0.005, 0.02] {
-        let v = platform_and_rotor(Some(tau));
-        let (p, l, e) = drifts(&v);
-        struct Axes(f64);
-        impl Observer for Axes {
-            fn on_step(&mut self, s: &StepValues) -> std::io::Result<()> {
-                let axis =
-                    |i: usize| nalgebra::UnitQuaternion::new_normalize(s.q[i]) * Vector3::z();
-                self.0 = self.0.max(axis(0).angle(&axis(1)));
-                Ok(())
+    for law in [Value::Null, json!({"kind": "smc"})] {
+        let with = |mut v: Value| {
+            if !law.is_null() {
+                v["stabilizer"] = law.clone();
             }
-        }
-        let mut axes = Axes(0.0);
-        CoSim::new(&scenario(&v))
-            .run_to_end(&mut axes)
-            .unwrap_or_else(|e| panic!("{e}"));
-        eprintln!(
-            "platform | rotor at τ = {} ms: axes up to {:.3e} rad apart, |ΔP| {p:.3e} kg·m/s, \
-             |ΔL|/|L| {:.2} %, ΔKE {:+.2} % (monolithic {p0:.1e}, {:.2e} %, {:+.2e} %)",
-            tau * 1e3,
-            axes.0,
-            100.0 * l,
-            100.0 * e,
-            100.0 * l0,
-            100.0 * e0
-        );
-        // At 20 ms the axes stay together (3.6e-3 rad measured) while |L| and the
-        // kinetic energy drift 4.5 % and +2.3 %, just outside the targets: printed.
-        assert!(axes.0 <= 1e-2, "τ = {tau}: axes {} rad apart", axes.0);
-        if tau <= 0.005 {
-            assert!(p <= 1.0, "τ = {tau}: |ΔP| {p}");
-            assert!((l - l0).abs() <= 0.03, "τ = {tau}: |ΔL|/|L| {l} vs {l0}");
-            assert!(
-                e - e0 <= 0.02 && e - e0 >= -0.05,
-                "τ = {tau}: ΔKE {e} vs {e0}"
+            v
+        };
+        let (p0, l0, e0) = drifts(&with(platform_and_rotor(None)));
+        for tau in [0.001, 0.005, 0.02] {
+            let v = with(platform_and_rotor(Some(tau)));
+            let (p, l, e) = drifts(&v);
+            struct Axes(f64);
+            impl Observer for Axes {
+                fn on_step(&mut self, s: &StepValues) -> std::io::Result<()> {
+                    let axis =
+                        |i: usize| nalgebra::UnitQuaternion::new_normalize(s.q[i]) * Vector3::z();
+                    self.0 = self.0.max(axis(0).angle(&axis(1)));
+                    Ok(())
+                }
+            }
+            let mut axes = Axes(0.0);
+            CoSim::new(&scenario(&v))
+                .run_to_end(&mut axes)
+                .unwrap_or_else(|e| panic!("{e}"));
+            eprintln!(
+                "platform | rotor ({law}) at τ = {} ms: axes up to {:.3e} rad apart, \
+                 |ΔP| {p:.3e} kg·m/s, |ΔL|/|L| {:.2} %, ΔKE {:+.2} % (monolithic {p0:.1e}, \
+                 {:.2e} %, {:+.2e} %)",
+                tau * 1e3,
+                axes.0,
+                100.0 * l,
+                100.0 * e,
+                100.0 * l0,
+                100.0 * e0
             );
+            // At 20 ms the axes stay together under the exact law (3.6e-3 rad measured)
+            // while |L| and the kinetic energy drift 4.5 % and +2.3 %, just outside the
+            // targets: printed.
+            if tau <= 0.005 || law.is_null() {
+                assert!(
+                    axes.0 <= 1e-2,
+                    "{law}, τ = {tau}: axes {} rad apart",
+                    axes.0
+                );
+            }
+            if tau <= 0.005 {
+                assert!(p <= 1.0, "{law}, τ = {tau}: |ΔP| {p}");
+                assert!(
+                    (l - l0).abs() <= 0.03,
+                    "{law}, τ = {tau}: |ΔL|/|L| {l} vs {l0}"
+                );
+                assert!(
+                    e - e0 <= 0.02 && e - e0 >= -0.05,
+                    "{law}, τ = {tau}: ΔKE {e} vs {e0}"
+                );
+            }
         }
     }
 }
