@@ -105,6 +105,24 @@ pub struct Node {
     held_elsewhere: Vec<bool>,
 }
 
+/// Per ghost of node `index`: whether a row owned by another node holds its body (see
+/// `Node::held_elsewhere`). One pass over the rows; empty where no slope is sent.
+fn held_elsewhere(scenario: &Scenario, layout: &Layout, index: usize) -> Vec<bool> {
+    if !scenario.slopes_multipliers() {
+        return Vec::new();
+    }
+    let mut held = vec![false; scenario.bodies.len()];
+    for (l, link) in scenario.links.iter().enumerate() {
+        if layout.link_owner[l] != index {
+            held[link.a] = true;
+            if !link.world {
+                held[link.b] = true;
+            }
+        }
+    }
+    layout.ghosts[index].iter().map(|&g| held[g]).collect()
+}
+
 /// A node's side of the momentum account (`partition::momentum`): what it measures.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 struct MomentumAccount {
@@ -307,18 +325,7 @@ impl Node {
             momentum,
             lines: line_ends,
             reactions: scenario.ghosts_carry_reactions(),
-            held_elsewhere: layout.ghosts[index]
-                .iter()
-                .map(|&g| {
-                    (0..layout.nodes).filter(|&n| n != index).any(|n| {
-                        layout.links[n].iter().any(|&l| {
-                            let link = &scenario.links[l];
-                            (link.a == g || (!link.world && link.b == g))
-                                && layout.link_owner[l] == n
-                        })
-                    })
-                })
-                .collect(),
+            held_elsewhere: held_elsewhere(scenario, layout, index),
         }
     }
 
