@@ -583,6 +583,9 @@ fn report(name: &str, outcome: &crate::run::Outcome, out: &std::path::Path) {
         outcome.wall_seconds,
         outcome.digest
     );
+    if let Some(stopped) = &outcome.stopped {
+        say!("{name}: {stopped}");
+    }
     say!("wrote {}", out.display());
     for w in outcome.warnings() {
         eprintln!("warning: {w}");

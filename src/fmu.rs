@@ -35,7 +35,9 @@
 //!
 //! Every failure is an [`FmuError`]; every FMI call's status is checked, and `fmi2Discard`,
 //! `fmi2Error`, `fmi2Fatal` and `fmi2Pending` (FMI 3.0: `fmi3Discard`, `fmi3Error`,
-//! `fmi3Fatal`) become [`FmuError::Status`]. What this loader supports: FMI 2.0 and 3.0,
+//! `fmi3Fatal`) become [`FmuError::Status`], except a step by which the FMU asks to end
+//! the simulation ([`StepEnd::Stopped`]). What an FMU logs at warning and above is
+//! printed and kept ([`log`]). What this loader supports: FMI 2.0 and 3.0,
 //! co-simulation, on the platforms FMI 2.0 names (`linux64`, `linux32`, `darwin64`,
 //! `win64`, `win32`) and the FMI 3.0 platform tuples of [`fmi3::PLATFORMS`]
 //! (`x86_64-linux`, `aarch64-linux`, `x86_64-darwin`, `aarch64-darwin`,
@@ -55,7 +57,7 @@ pub use archive::{unpack, unpack_with_limits, Limits, Unpacked};
 pub use description::{
     Causality, CoSimulation, ModelDescription, ScalarVariable, VarKind, Variability,
 };
-pub use instance::{FmuState, Instance};
+pub use instance::{FmuState, Instance, StepEnd};
 pub use loaded::Fmu;
 pub use log::{FmuLog, LogEntry};
 
@@ -193,19 +195,6 @@ pub enum FmuError {
         time: Option<f64>,
         /// The status returned (`fmi2Error`, `fmi3Error`).
         status: &'static str,
-    },
-    /// An FMI 3.0 step returned OK but cannot be taken as done: the FMU set
-    /// `terminateSimulation`, or returned early although early return was not allowed.
-    #[error("FMU '{fmu}': {function} at t = {time} s: {reason}")]
-    StepEnded {
-        /// The FMU instance's name.
-        fmu: String,
-        /// The FMI function (`fmi3DoStep`).
-        function: &'static str,
-        /// The communication point the step started from [s].
-        time: f64,
-        /// What the FMU reported.
-        reason: String,
     },
     /// An earlier call returned `fmi2Fatal` (`fmi3Fatal`): the standard allows no further
     /// call.

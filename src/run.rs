@@ -68,6 +68,9 @@ pub struct Outcome {
     pub joint_work: Option<crate::trace::joint_work::JointWork>,
     /// Channels whose requested delays the network did not realize ([`unserved`]).
     pub unserved: Vec<unserved::Unserved>,
+    /// An FMU asked to end the run before its duration: who, when and how
+    /// (`stopped by FMU 'stair' at t = 9 s (…)`); the run ended normally there.
+    pub stopped: Option<String>,
 }
 
 impl Outcome {
@@ -319,6 +322,7 @@ fn finish(
         boundary_layer: recorder.boundary_layer().cloned(),
         joint_work: recorder.joint_work().cloned(),
         unserved: unserved::unserved(&world),
+        stopped: world.stopped().map(ToString::to_string),
     };
     write_epochs(out, &world, &experiment)?;
     let run = Ran {
@@ -379,13 +383,16 @@ fn drive(
                 t = c.next_window();
             }
             None => {
-                while t < target {
+                while t < target && !world.finished() {
                     t = SimTime(t.0.saturating_add(slice.0)).min(target);
                     world.advance_to(t, recorder)?;
                     progress.tick(world.steps_done());
                     interrupted(out, t, end, (last_cp.as_deref(), next_cp))?;
                 }
             }
+        }
+        if world.finished() {
+            break; // an FMU asked to stop: the run ends where it did
         }
         interrupted(out, t, end, (last_cp.as_deref(), next_cp))?;
         if let (Some(e), Some(cp)) = (every, next_cp) {
@@ -588,6 +595,7 @@ fn write_summary(out: &Path, run: &Ran) -> Result<()> {
         // `diverged` for what the simulation did (a divergence, a numerical failure);
         // `failed` for what stopped it from outside (an unwritable checkpoint).
         "status": match failure {
+            None if world.stopped().is_some() => "stopped",
             None => "ok",
             Some(Error::Diverged(_) | Error::Numerical { .. }) => "diverged",
             Some(Error::Fmu(_)) => "fmu_error",
@@ -595,6 +603,13 @@ fn write_summary(out: &Path, run: &Ran) -> Result<()> {
             Some(_) => "failed",
         },
         "error": error,
+        // Who ended the run before its duration, when and how ("status": "stopped").
+        "stopped": world.stopped().map(|s| json!({
+            "fmu": s.fmu,
+            "time": s.time.as_secs_f64(),
+            "reason": s.reason,
+            "message": s.to_string(),
+        })),
         "divergence": failure.map_or(Value::Null, divergence),
         "digest": outcome.digest,
         "digest_algorithm": DIGEST_ALGORITHM,

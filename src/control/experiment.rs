@@ -269,6 +269,9 @@ impl Controller {
         while t < scenario.duration && t < stop {
             let t_end = SimTime(t.0.saturating_add(period.0)).min(scenario.duration);
             world.advance_to(t, obs)?;
+            if world.finished() {
+                break; // an FMU asked to stop: no window is left to decide
+            }
             let live_world: &P = world;
             let eval = |x: &[f64]| evaluate(live_world, &delays, x, t, t_end);
             let surface_here = spec.surface_window == Some(t);

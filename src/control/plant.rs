@@ -44,4 +44,8 @@ pub trait Plant: Clone + Sync {
 
     /// The last closed measurement window: its end and its cost [m].
     fn last_window(&self) -> Option<(SimTime, f64)>;
+
+    /// Whether the plant has run to its end: the scenario's duration, or earlier where
+    /// a part of it (an FMU) asked to stop. No window starts after it.
+    fn finished(&self) -> bool;
 }

@@ -12,6 +12,10 @@
 //! the same [`Instance`] methods (`fmi3EnterInitializationMode` with the start time,
 //! `fmi3DoStep`, …), so nothing here depends on the version.
 //!
+//! An FMU that asks to end the simulation ([`StepEnd::Stopped`]) is stepped no more;
+//! the world ends the run at the last communication point it completed
+//! ([`FmuUnit::stop_request`]).
+//!
 //! A fork (`Clone`) or a checkpoint carries the FMU's state as bytes
 //! (`fmi2SerializeFMUstate`); the fork instantiates its own instance on its first event
 //! and restores them. An FMU without `canGetAndSetFMUstate` and `canSerializeFMUstate`
@@ -22,7 +26,7 @@ use std::sync::{Arc, Mutex};
 
 use super::unit::Unit;
 use crate::error::{Error, Result};
-use crate::fmu::{Fmu, Instance};
+use crate::fmu::{Fmu, Instance, StepEnd};
 use crate::kernel::SimTime;
 use crate::network::route::Route;
 use crate::network::{Message, Payload};
@@ -45,6 +49,9 @@ pub struct FmuUnit {
     saved: Option<Arc<Vec<u8>>>,
     /// Why this fork cannot run (its source could not hand over its state).
     broken: Option<String>,
+    /// The FMU asked to end the simulation: the communication point it completed last,
+    /// and how it asked. It is stepped no more.
+    stop: Option<(SimTime, String)>,
     /// The loaded FMU, shared by a run and its forks.
     fmu: Option<Arc<Fmu>>,
     /// The instance; a mutex so that a fork (`&self`) can ask it for its state.
@@ -77,11 +84,18 @@ impl FmuUnit {
             inputs: spec.inputs.iter().map(|v| v.start).collect(),
             saved: None,
             broken: None,
+            stop: None,
             fmu: None,
             live: None,
             output_vrs: Vec::new(),
             input_vrs: Vec::new(),
         }
+    }
+
+    /// The FMU's request to end the simulation, if it made one: the last communication
+    /// point it completed, and how it asked.
+    pub fn stop_request(&self) -> Option<&(SimTime, String)> {
+        self.stop.as_ref()
     }
 
     /// Whether the instance exists.
@@ -180,7 +194,7 @@ impl FmuUnit {
     pub fn step(&mut self, spec: &FmuSpec, t: SimTime, dt: SimTime) -> Result<()> {
         let h = spec.step;
         let end = SimTime(t.0.saturating_add(dt.0));
-        if self.time >= t && self.time < end {
+        if self.stop.is_none() && self.time >= t && self.time < end {
             let inst = self
                 .live
                 .as_mut()
@@ -194,12 +208,26 @@ impl FmuUnit {
                     .map_err(fmu_error)?;
             }
             while self.time < end {
-                inst.do_step(self.time.as_secs_f64(), h.as_secs_f64())
-                    .map_err(fmu_error)?;
+                let (from, over) = (self.time.as_secs_f64(), h.as_secs_f64());
+                let done = inst.do_step(from, over).map_err(fmu_error)?;
+                if let StepEnd::Stopped { reached, reason } = done {
+                    // A stop request: the step counts as done only if the FMU reached
+                    // its end (compared as the FMU computed it, `from + over`); else it
+                    // stays at the point before, whose outputs are read already.
+                    if reached >= from + over {
+                        self.time = SimTime(self.time.0.saturating_add(h.0));
+                        inst.get_real(&self.output_vrs, &mut self.pending)
+                            .map_err(fmu_error)?;
+                    }
+                    self.stop = Some((self.time, reason));
+                    break;
+                }
                 self.time = SimTime(self.time.0.saturating_add(h.0));
             }
-            inst.get_real(&self.output_vrs, &mut self.pending)
-                .map_err(fmu_error)?;
+            if self.stop.is_none() {
+                inst.get_real(&self.output_vrs, &mut self.pending)
+                    .map_err(fmu_error)?;
+            }
         }
         if self.time == end {
             self.published.copy_from_slice(&self.pending);
@@ -242,6 +270,7 @@ impl Clone for FmuUnit {
             inputs: self.inputs.clone(),
             saved,
             broken,
+            stop: self.stop.clone(),
             fmu: self.fmu.clone(),
             live: None,
             output_vrs: Vec::new(),
@@ -286,6 +315,8 @@ impl<'de> serde::Deserialize<'de> for FmuUnit {
             inputs: s.inputs,
             saved: s.state.map(Arc::new),
             broken: None,
+            // A checkpoint is written only while the run goes on: no stop was asked.
+            stop: None,
             fmu: None,
             live: None,
             output_vrs: Vec::new(),

@@ -166,6 +166,10 @@ impl crate::control::Plant for CoSim {
     fn last_window(&self) -> Option<(SimTime, f64)> {
         self.epochs.last().map(|e| (e.t_end, e.cost))
     }
+
+    fn finished(&self) -> bool {
+        CoSim::finished(self)
+    }
 }
 
 /// The channels of `scenario` over `layout`'s routes and, on a TDMA network, the
@@ -231,6 +235,30 @@ pub struct EpochRecord {
     pub bandwidth: f64,
 }
 
+/// An FMU's request that ended the run before its duration ([`CoSim::stopped`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Stopped {
+    /// The FMU's name.
+    pub fmu: String,
+    /// The run's last step: the lock-step at or before the last communication point the
+    /// FMU completed.
+    pub time: SimTime,
+    /// How it asked, in the FMI's words.
+    pub reason: String,
+}
+
+impl std::fmt::Display for Stopped {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "stopped by FMU '{}' at t = {} s ({})",
+            self.fmu,
+            self.time.as_secs_f64(),
+            self.reason
+        )
+    }
+}
+
 /// The whole co-simulation. `Clone` is a fork: the clone continues independently and
 /// bit-identically to the original.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
@@ -271,6 +299,10 @@ pub struct CoSim {
     fmus: Vec<FmuUnit>,
     /// The traced FMU outputs of the current step (see [`StepValues::signals`]).
     signals: Vec<f64>,
+    /// An FMU asked to end the run: it ends after the step at this time. Not in a
+    /// checkpoint: none is written once a run has stopped.
+    #[serde(skip)]
+    stopped: Option<Stopped>,
     /// Links per lock-step (over every node's system) from which the nodes step in
     /// parallel on rayon ([`PARALLEL_MIN_LINKS`] unless set). Not part of the world's
     /// state: a checkpoint does not store it, and it changes no bit of a run.
@@ -410,6 +442,7 @@ impl CoSim {
             max_violation: 0.0,
             fmus: scenario.fmus.iter().map(FmuUnit::new).collect(),
             signals: Vec::new(),
+            stopped: None,
             parallel_min_links: PARALLEL_MIN_LINKS,
             scenario: shared,
         }
@@ -522,7 +555,10 @@ impl CoSim {
     /// [`finished`]: Self::finished
     /// [`now`]: Self::now
     pub fn reached(&self) -> SimTime {
-        let end = self.scenario.duration;
+        let end = self
+            .stopped
+            .as_ref()
+            .map_or(self.scenario.duration, |s| s.time);
         if self.finished() {
             return end;
         }
@@ -563,9 +599,51 @@ impl CoSim {
         })
     }
 
-    /// Whether every event up to the end of the run has been processed.
+    /// Whether every event up to the end of the run has been processed: the scenario's
+    /// duration, or where an FMU's request [`stopped`](Self::stopped) it.
     pub fn finished(&self) -> bool {
-        self.steps_done > self.scenario.steps
+        self.steps_done > self.last_step()
+    }
+
+    /// The FMU's request that ended the run before its duration, if one did.
+    pub fn stopped(&self) -> Option<&Stopped> {
+        self.stopped.as_ref()
+    }
+
+    /// The index of the run's last step: the scenario's last, or the one an FMU's stop
+    /// request ends the run at.
+    fn last_step(&self) -> u64 {
+        let dt = self.scenario.dt.0;
+        self.stopped
+            .as_ref()
+            .map_or(self.scenario.steps, |s| s.time.0 / dt)
+    }
+
+    /// Takes note of the FMUs' stop requests after the FMUs stepped from `t`: the
+    /// earliest (the first FMU in scenario order on a tie) ends the run at the lock-step
+    /// at or before the point it completed. Whether that is `t` itself, whose step is
+    /// recorded already (the FMU could not complete the step it was asked for).
+    fn note_stop(&mut self, t: SimTime) -> bool {
+        let dt = self.scenario.dt.0;
+        let request = self
+            .fmus
+            .iter()
+            .zip(&self.scenario.fmus)
+            .filter_map(|(unit, spec)| {
+                let (at, why) = unit.stop_request()?;
+                Some((SimTime(at.0 / dt * dt).max(t), spec, why))
+            })
+            .min_by_key(|(at, _, _)| *at);
+        if let Some((at, spec, why)) = request {
+            if self.stopped.as_ref().is_none_or(|s| at < s.time) {
+                self.stopped = Some(Stopped {
+                    fmu: spec.name.clone(),
+                    time: at,
+                    reason: why.clone(),
+                });
+            }
+        }
+        self.stopped.as_ref().is_some_and(|s| s.time <= t)
     }
 
     /// Sets the channel periods from time `at` on (a controller decision): `requested[c]`
@@ -663,7 +741,7 @@ impl CoSim {
     /// window ending at `t` is closed and a controller can decide at `t`).
     pub fn advance_to(&mut self, t: SimTime, obs: &mut dyn Observer) -> Result<()> {
         while let Some((time, class)) = self.next_key() {
-            if time > t || (time == t && class > EventClass::Measurement) {
+            if time > t || (time == t && class > EventClass::Measurement) || self.finished() {
                 break;
             }
             self.next_event(class, obs)?;
@@ -950,7 +1028,7 @@ impl CoSim {
     /// The lock-step of every node at `t`.
     fn step(&mut self, t: SimTime, obs: &mut dyn Observer) -> Result<()> {
         let k = self.steps_done;
-        let last = k == self.scenario.steps;
+        let last = k == self.last_step();
         let parallel = self.steps_in_parallel();
         // The units share nothing during a step: each kind does its first half together
         // (the partitions batch their rate evaluations, on rayon when the step is large
@@ -999,6 +1077,12 @@ impl CoSim {
         }
         let (dt, scenario) = (self.scenario.dt, &*self.scenario);
         Unit::finish_steps(&mut self.fmus, t, dt, scenario, false)?;
+        if self.fmus.iter().any(|u| u.stop_request().is_some()) && self.note_stop(t) {
+            // An FMU could not complete its step from t and asked to stop: the run
+            // ends at t, whose step is recorded; the nodes do not step past it.
+            return Ok(());
+        }
+        let scenario = &*self.scenario;
         Unit::finish_steps(&mut self.nodes, t, dt, scenario, parallel)?;
         self.next_step = Some(SimTime(t.0.saturating_add(self.scenario.dt.0)));
         Ok(())

@@ -43,6 +43,10 @@ pub const ERROR: Status = 3;
 pub const FATAL: Status = 4;
 /// `fmi2Pending`.
 pub const PENDING: Status = 5;
+/// `fmi2LastSuccessfulTime`, the `fmi2StatusKind` asked of `fmi2GetRealStatus`.
+pub const LAST_SUCCESSFUL_TIME: c_int = 2;
+/// `fmi2Terminated`, the `fmi2StatusKind` asked of `fmi2GetBooleanStatus`.
+pub const TERMINATED: c_int = 3;
 /// `fmi2CoSimulation`, the `fmi2Type` passed to `fmi2Instantiate` (`fmi2ModelExchange` is 0).
 pub const CO_SIMULATION: c_int = 1;
 
@@ -227,6 +231,10 @@ pub type StateSize = unsafe extern "C" fn(Component, State, *mut usize) -> Statu
 pub type Serialize = unsafe extern "C" fn(Component, State, *mut c_char, usize) -> Status;
 /// `fmi2DeSerializeFMUstate(c, bytes, size, &state)`.
 pub type Deserialize = unsafe extern "C" fn(Component, *const c_char, usize, *mut State) -> Status;
+/// `fmi2GetRealStatus(c, kind, &value)` (`fmi2StatusKind` is a C enum, `int`).
+pub type GetRealStatus = unsafe extern "C" fn(Component, c_int, *mut Real) -> Status;
+/// `fmi2GetBooleanStatus(c, kind, &value)`.
+pub type GetBooleanStatus = unsafe extern "C" fn(Component, c_int, *mut Boolean) -> Status;
 /// `fmi2DoStep(c, t, h, noSetFMUStatePriorToCurrentPoint)`.
 pub type DoStep = unsafe extern "C" fn(Component, Real, Real, Boolean) -> Status;
 
@@ -269,6 +277,11 @@ pub struct Functions {
     pub set_boolean: SetValues<Boolean>,
     /// `fmi2DoStep`.
     pub do_step: DoStep,
+    /// `fmi2GetRealStatus` and `fmi2GetBooleanStatus`, asked after a step returned
+    /// `fmi2Discard` whether the FMU wants the simulation to end and how far it got.
+    /// Every FMI 2.0 co-simulation FMU must export them, but they are not required here:
+    /// without them a discarded step is an error, as it was before they were asked.
+    pub status: Option<(GetRealStatus, GetBooleanStatus)>,
     /// `fmi2GetFMUstate`, `fmi2SetFMUstate`, `fmi2FreeFMUstate` when
     /// `canGetAndSetFMUstate`.
     pub state: Option<(GetState, SetState, FreeState)>,
@@ -312,6 +325,9 @@ impl Functions {
                 set_integer: sym(l, fmu, "fmi2SetInteger")?,
                 set_boolean: sym(l, fmu, "fmi2SetBoolean")?,
                 do_step: sym(l, fmu, "fmi2DoStep")?,
+                status: sym(l, fmu, "fmi2GetRealStatus")
+                    .and_then(|r| Ok((r, sym(l, fmu, "fmi2GetBooleanStatus")?)))
+                    .ok(),
                 state: if state {
                     Some((
                         sym(l, fmu, "fmi2GetFMUstate")?,

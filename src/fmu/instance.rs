@@ -91,6 +91,21 @@ impl Drop for Core {
     }
 }
 
+/// How [`Instance::do_step`] ended.
+#[derive(Debug, Clone, PartialEq)]
+pub enum StepEnd {
+    /// The step reached its end.
+    Completed,
+    /// The FMU asked to end the simulation: it reached `reached` [s] (the step's end, or
+    /// an earlier time it could not go past) and cannot be stepped further.
+    Stopped {
+        /// The last time the FMU completed [s], between the step's start and end.
+        reached: f64,
+        /// How it asked, in the FMI's words.
+        reason: String,
+    },
+}
+
 /// One co-simulation instance of an [`super::Fmu`]. Freed (`fmi2FreeInstance` or
 /// `fmi3FreeInstance`) when it and every [`FmuState`] made from it are dropped.
 pub struct Instance {
@@ -176,6 +191,26 @@ impl Core {
         time: Option<f64>,
         f: impl FnOnce(Component) -> Status,
     ) -> Result<MutexGuard<'_, Inner>, FmuError> {
+        let (inner, status) = self.call_status(function, time, f)?;
+        if status == fmi2::DISCARD {
+            return Err(FmuError::Status {
+                fmu: self.shared.name.clone(),
+                function,
+                time: time.or(inner.time),
+                status: self.status_name(status),
+            });
+        }
+        Ok(inner)
+    }
+
+    /// [`Core::call`], but a discarded call (`fmi2Discard`, `fmi3Discard`) is handed back
+    /// with its status rather than refused: a step's caller asks the FMU why.
+    fn call_status(
+        &self,
+        function: &'static str,
+        time: Option<f64>,
+        f: impl FnOnce(Component) -> Status,
+    ) -> Result<(MutexGuard<'_, Inner>, Status), FmuError> {
         let mut inner = self.lock();
         if inner.fatal {
             return Err(FmuError::Unusable {
@@ -187,7 +222,7 @@ impl Core {
         let status = f(inner.component);
         let time = time.or(inner.time);
         match status {
-            fmi2::OK => Ok(inner),
+            fmi2::OK | fmi2::DISCARD => Ok((inner, status)),
             fmi2::WARNING => {
                 if self.logging {
                     use std::io::Write;
@@ -198,7 +233,7 @@ impl Core {
                         self.status_name(status)
                     );
                 }
-                Ok(inner)
+                Ok((inner, status))
             }
             other => {
                 if other == fmi2::FATAL {
@@ -438,23 +473,60 @@ impl Instance {
 
     /// `fmi2DoStep` or `fmi3DoStep` from the communication point `t` [s] over `h` [s];
     /// inputs are held over the step as set. Prior states may still be restored
-    /// afterwards (`noSetFMUStatePriorToCurrentPoint` = false). An FMI 3.0 step that
-    /// returns OK but sets `terminateSimulation`, or returns early although early return
-    /// was not allowed, is [`FmuError::StepEnded`].
-    pub fn do_step(&mut self, t: f64, h: f64) -> Result<(), FmuError> {
+    /// afterwards (`noSetFMUStatePriorToCurrentPoint` = false).
+    ///
+    /// The FMU may ask to end the simulation ([`StepEnd::Stopped`]): in FMI 2.0 by
+    /// returning `fmi2Discard` with `fmi2GetBooleanStatus(fmi2Terminated)` true (how far
+    /// it got from `fmi2GetRealStatus(fmi2LastSuccessfulTime)`, `t` if it cannot say); in
+    /// FMI 3.0 by setting `terminateSimulation` (with `fmi3OK`, `fmi3Warning` or
+    /// `fmi3Discard`), or by returning early, which this importer does not allow and so
+    /// cannot continue from (how far it got from `lastSuccessfulTime`). A discarded step
+    /// without such a request is [`FmuError::Status`].
+    pub fn do_step(&mut self, t: f64, h: f64) -> Result<StepEnd, FmuError> {
         let f = match self.core.shared.api {
             Api::Fmi2(f) => {
-                let mut inner = self.core.call("fmi2DoStep", Some(t), |c| {
+                let (mut inner, status) = self.core.call_status("fmi2DoStep", Some(t), |c| {
                     // SAFETY: a live component; plain values.
                     unsafe { (f.do_step)(c, t, h, 0) }
                 })?;
-                inner.time = Some(t + h);
-                return Ok(());
+                if status != fmi2::DISCARD {
+                    inner.time = Some(t + h);
+                    return Ok(StepEnd::Completed);
+                }
+                let asked = f.status.and_then(|(real_status, boolean_status)| {
+                    let (mut terminated, mut reached) = (0 as fmi2::Boolean, t);
+                    // SAFETY: a live component; the out-parameters are live locals.
+                    let asked = unsafe {
+                        boolean_status(inner.component, fmi2::TERMINATED, &mut terminated)
+                    } == fmi2::OK
+                        && terminated != 0;
+                    // SAFETY: as above.
+                    let known = unsafe {
+                        real_status(inner.component, fmi2::LAST_SUCCESSFUL_TIME, &mut reached)
+                    } == fmi2::OK;
+                    // A time the FMU cannot vouch for (NaN, outside the step) counts as
+                    // the step's start.
+                    let within = known && (t..=t + h).contains(&reached);
+                    asked.then_some(if within { reached } else { t })
+                });
+                let Some(reached) = asked else {
+                    return Err(FmuError::Status {
+                        fmu: self.core.shared.name.clone(),
+                        function: "fmi2DoStep",
+                        time: Some(t),
+                        status: fmi2::status_name(status),
+                    });
+                };
+                inner.time = Some(reached);
+                return Ok(StepEnd::Stopped {
+                    reached,
+                    reason: "fmi2DoStep returned fmi2Discard and fmi2Terminated is true".into(),
+                });
             }
             Api::Fmi3(f) => f,
         };
         let (mut event, mut terminate, mut early, mut last) = (0u8, 0u8, 0u8, t);
-        let mut inner = self.core.call("fmi3DoStep", Some(t), |c| {
+        let (mut inner, status) = self.core.call_status("fmi3DoStep", Some(t), |c| {
             // SAFETY: a live instance; the out-parameters are live locals.
             unsafe {
                 (f.do_step)(
@@ -469,25 +541,41 @@ impl Instance {
                 )
             }
         })?;
-        let ended = |reason: String| FmuError::StepEnded {
-            fmu: self.core.shared.name.clone(),
-            function: "fmi3DoStep",
-            time: t,
-            reason,
-        };
-        if terminate != 0 {
-            return Err(ended(
-                "the FMU set terminateSimulation: it cannot go on".into(),
-            ));
-        }
-        if early != 0 {
-            return Err(ended(format!(
-                "the FMU returned early at t = {last} s although early return was not allowed"
-            )));
-        }
         // `eventHandlingNeeded` is only meaningful with event mode, which is off.
-        inner.time = Some(t + h);
-        Ok(())
+        let discarded = status == fmi3::DISCARD;
+        let (reached, reason) = if terminate != 0 {
+            // A completed step reached its end; a discarded or early one says how far.
+            let reached = if discarded || early != 0 { last } else { t + h };
+            let reason = format!(
+                "fmi3DoStep returned {} with terminateSimulation = true",
+                fmi3::status_name(status)
+            );
+            (reached, reason)
+        } else if early != 0 && !discarded {
+            let reason = format!(
+                "fmi3DoStep returned early at t = {last} s, which this importer does not allow \
+                 (earlyReturnAllowed = false), so it cannot go on"
+            );
+            (last, reason)
+        } else if discarded {
+            return Err(FmuError::Status {
+                fmu: self.core.shared.name.clone(),
+                function: "fmi3DoStep",
+                time: Some(t),
+                status: fmi3::status_name(status),
+            });
+        } else {
+            inner.time = Some(t + h);
+            return Ok(StepEnd::Completed);
+        };
+        // A time the FMU cannot vouch for (NaN, before the step) counts as the step's start.
+        let reached = if (t..=t + h).contains(&reached) {
+            reached
+        } else {
+            t
+        };
+        inner.time = Some(reached);
+        Ok(StepEnd::Stopped { reached, reason })
     }
 
     /// `fmi2SetReal` or `fmi3SetFloat64`: `values[i]` to the variable `refs[i]`.

@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use dsmcosim::fmu::{Causality, Fmu, FmuError, ModelDescription, VarKind, Variability};
+use dsmcosim::fmu::{Causality, Fmu, FmuError, ModelDescription, StepEnd, VarKind, Variability};
 use serde_json::json;
 
 use crate::closed_form;
@@ -278,7 +278,7 @@ fn fmi3_errors_name_the_fmi3_function_status_and_capability() {
 }
 
 #[test]
-fn a_step_that_sets_terminate_simulation_is_an_error_naming_fmu_and_time() {
+fn a_step_that_sets_terminate_simulation_is_a_stop_request_at_its_end() {
     let dir = tempfile::tempdir().expect("tempdir");
     let fmu = variant(
         dir.path(),
@@ -289,23 +289,89 @@ fn a_step_that_sets_terminate_simulation_is_an_error_naming_fmu_and_time() {
     .expect("load");
     let mut inst = start(&fmu, "plant", &[]);
     let h = 0.25;
-    inst.do_step(0.0, h).expect("step to 0.25 s");
-    inst.do_step(0.25, h).expect("step to 0.5 s");
-    let err = inst
-        .do_step(0.5, h)
-        .expect_err("the step reaching 0.75 s ends the run");
-    assert!(matches!(err, FmuError::StepEnded { .. }), "{err:?}");
-    let text = err.to_string();
-    assert!(
-        text.starts_with("FMU 'ending': fmi3DoStep at t = 0.5 s")
-            && text.contains("terminateSimulation"),
-        "{text}"
+    assert_eq!(
+        inst.do_step(0.0, h).expect("step to 0.25 s"),
+        StepEnd::Completed
     );
     assert_eq!(
-        inst.time(),
-        Some(0.5),
-        "the ended step is not counted as reached"
+        inst.do_step(0.25, h).expect("step to 0.5 s"),
+        StepEnd::Completed
     );
+    match inst
+        .do_step(0.5, h)
+        .expect("the step reaching 0.75 s asks to stop")
+    {
+        StepEnd::Stopped { reached, reason } => {
+            assert_eq!(reached, 0.75, "the step completed before the request");
+            assert_eq!(
+                reason,
+                "fmi3DoStep returned fmi3OK with terminateSimulation = true"
+            );
+        }
+        other => panic!("expected a stop request, got {other:?}"),
+    }
+    assert_eq!(inst.time(), Some(0.75), "the completed step is reached");
+}
+
+/// A scenario of the msd3 variant that asks to stop at 0.75 s, run by `dsmcosim run`:
+/// the run ends there normally, with that row, and says who stopped it.
+#[test]
+fn an_fmi3_stop_request_ends_the_run_normally_with_its_last_row() {
+    let dir = crate::fmus::scratch("fmu-fmi3", "stop-request");
+    variant(
+        &dir,
+        &msd3_xml(),
+        "#define MSD3_TERMINATE_AT 0.75",
+        "ending",
+    )
+    .expect("load");
+    let scenario = serde_json::json!({
+        "name": "ending", "seed": 1, "duration": 2.0, "dt": 0.05,
+        "fmus": [{"name": "plant", "path": "ending.fmu", "trace": ["x"]}]
+    });
+    let path = dir.join("scenario.json");
+    std::fs::write(&path, scenario.to_string()).unwrap();
+    let out = dir.join("out");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_dsmcosim"))
+        .args([
+            "run",
+            path.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .expect("run dsmcosim");
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr),
+    );
+    assert_eq!(o.status.code(), Some(0), "{stdout}{stderr}");
+    let message = "stopped by FMU 'plant' at t = 0.75 s \
+                   (fmi3DoStep returned fmi3OK with terminateSimulation = true)";
+    assert!(stdout.contains(message), "{stdout}");
+    let trace = std::fs::read_to_string(out.join("trace.csv")).unwrap();
+    let last = trace.lines().last().unwrap();
+    assert!(
+        last.starts_with("0.75,"),
+        "the last row is the stop's: {last}"
+    );
+    let times: Vec<&str> = trace
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').next().unwrap())
+        .collect();
+    assert_eq!(
+        times,
+        ["0", "0.5", "0.75"],
+        "every 10th step, and the stop's"
+    );
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "stopped");
+    assert_eq!(summary["stopped"]["fmu"], "plant");
+    assert_eq!(summary["stopped"]["time"], 0.75);
+    assert_eq!(summary["stopped"]["message"], message);
+    assert_eq!(summary["steps"], 15);
 }
 
 #[test]

@@ -133,3 +133,62 @@ fn a_quiet_fmu_keeps_no_message() {
     assert!(logged_lines(&stderr).is_empty(), "{stderr}");
     assert_eq!(summary["fmus"][0]["messages"], json!([]));
 }
+
+/// The rows of trace.csv: (t, x).
+fn rows(out: &Path) -> Vec<(f64, f64)> {
+    let trace = std::fs::read_to_string(out.join("trace.csv")).expect("trace.csv");
+    let mut lines = trace.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let x = header
+        .iter()
+        .position(|c| *c == "q.x")
+        .expect("a q.x column");
+    lines
+        .map(|l| {
+            let f: Vec<f64> = l.split(',').map(|v| v.parse().unwrap()).collect();
+            (f[0], f[x])
+        })
+        .collect()
+}
+
+#[test]
+fn a_stop_request_ends_the_run_normally_at_the_completed_step_with_its_row() {
+    let dir = scratch("fmu-quirks", "stop");
+    // x'' = 1 from rest: x = t²/2 exactly at every communication point (to round-off).
+    let (out, o, summary) = run(&dir, &alone(0.2, json!({"stop_at": 0.1, "F": 1.0})));
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr),
+    );
+    assert_eq!(o.status.code(), Some(0), "{stdout}{stderr}");
+    let message = "stopped by FMU 'q' at t = 0.1 s \
+                   (fmi2DoStep returned fmi2Discard and fmi2Terminated is true)";
+    assert!(stdout.contains(message), "{stdout}");
+    assert_eq!(summary["status"], "stopped");
+    assert_eq!(summary["error"], Value::Null);
+    assert_eq!(summary["stopped"]["fmu"], "q");
+    assert_eq!(summary["stopped"]["time"], 0.1);
+    assert_eq!(summary["stopped"]["message"], message);
+    assert_eq!(summary["steps"], 100);
+    let rows = rows(&out);
+    let &(t, x) = rows.last().unwrap();
+    assert_eq!(t, 0.1, "the stop's row is the last");
+    assert!((x - 0.005).abs() < 1e-15, "x(0.1 s) = {x}");
+    assert_eq!(rows.len(), 11, "rows 0, 0.01, … 0.1 s (decimation 10)");
+}
+
+#[test]
+fn a_stop_request_of_an_fmu_stepping_slower_than_the_lock_step_ends_at_its_point() {
+    let dir = scratch("fmu-quirks", "stop-slow");
+    // Communication steps of 10 ms over lock-steps of 1 ms: the step from 40 to 50 ms
+    // asks to stop, so the run ends at 50 ms, where the FMU's outputs are published.
+    let mut scenario = alone(0.2, json!({"stop_at": 0.05, "F": 1.0}));
+    scenario["fmus"][0]["step"] = json!(0.01);
+    let (out, o, summary) = run(&dir, &scenario);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{stderr}");
+    assert_eq!(summary["stopped"]["time"], 0.05);
+    assert_eq!(summary["steps"], 50);
+    let &(t, x) = rows(&out).last().unwrap();
+    assert_eq!((t, x), (0.05, 0.00125), "x = t²/2 at 50 ms");
+}
