@@ -116,7 +116,7 @@ impl std::fmt::Display for Divergence {
 }
 
 /// A named element of the model, for error messages.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Place {
     /// Link number k (1-based, file order), printed `link L<k>`.
     Link(usize),
@@ -130,6 +130,13 @@ pub enum Place {
     },
     /// Body id, printed `body B<id>`.
     Body(u32),
+    /// An output of an FMU, printed `FMU 'plant' output x`.
+    FmuOutput {
+        /// The FMU's name in the scenario.
+        fmu: String,
+        /// The output variable's name.
+        variable: String,
+    },
 }
 
 impl std::fmt::Display for Place {
@@ -138,6 +145,7 @@ impl std::fmt::Display for Place {
             Place::Link(k) => write!(f, "link L{k}"),
             Place::JointRow { joint, row } => write!(f, "joint J{joint} row {row}"),
             Place::Body(id) => write!(f, "body B{id}"),
+            Place::FmuOutput { fmu, variable } => write!(f, "FMU '{fmu}' output {variable}"),
         }
     }
 }

@@ -516,14 +516,21 @@ pub(crate) fn solver_json(scenario: &Scenario) -> Value {
 fn divergence(e: &Error) -> Value {
     match e {
         Error::Diverged(d) => {
-            let (link, body) = match d.place {
-                crate::error::Place::Link(k) => (Some(format!("L{k}")), None),
-                crate::error::Place::JointRow { joint, row } => {
-                    (Some(format!("J{joint}_{row}")), None)
+            use crate::error::Place;
+            let (link, body, fmu_output) = match &d.place {
+                Place::Link(k) => (Some(format!("L{k}")), None, None),
+                Place::JointRow { joint, row } => (Some(format!("J{joint}_{row}")), None, None),
+                Place::Body(id) => (None, Some(format!("B{id}")), None),
+                // As trace.csv names its column.
+                Place::FmuOutput { fmu, variable } => {
+                    (None, None, Some(format!("{fmu}.{variable}")))
                 }
-                crate::error::Place::Body(id) => (None, Some(format!("B{id}"))),
             };
-            json!({"time": d.time.as_secs_f64(), "node": d.node, "link": link, "body": body, "what": d.what})
+            let mut v = json!({"time": d.time.as_secs_f64(), "node": d.node, "link": link, "body": body, "what": d.what});
+            if let Some(column) = fmu_output {
+                v["fmu_output"] = json!(column);
+            }
+            v
         }
         Error::Numerical { time, message } => {
             json!({"time": time.as_secs_f64(), "node": null, "link": null, "body": null, "what": message})

@@ -25,7 +25,7 @@
 use std::sync::{Arc, Mutex};
 
 use super::unit::Unit;
-use crate::error::{Error, Result};
+use crate::error::{Divergence, Error, Place, Result};
 use crate::fmu::{Fmu, Instance, StepEnd};
 use crate::kernel::SimTime;
 use crate::network::route::Route;
@@ -181,6 +181,7 @@ impl FmuUnit {
             None => {
                 inst.get_real(&self.output_vrs, &mut self.pending)
                     .map_err(fmu_error)?;
+                finite(spec, self.time, &self.pending)?;
                 self.published.copy_from_slice(&self.pending);
             }
         }
@@ -218,6 +219,7 @@ impl FmuUnit {
                         self.time = SimTime(self.time.0.saturating_add(h.0));
                         inst.get_real(&self.output_vrs, &mut self.pending)
                             .map_err(fmu_error)?;
+                        finite(spec, self.time, &self.pending)?;
                     }
                     self.stop = Some((self.time, reason));
                     break;
@@ -227,6 +229,7 @@ impl FmuUnit {
             if self.stop.is_none() {
                 inst.get_real(&self.output_vrs, &mut self.pending)
                     .map_err(fmu_error)?;
+                finite(spec, self.time, &self.pending)?;
             }
         }
         if self.time == end {
@@ -248,6 +251,31 @@ impl FmuUnit {
         let bytes = inst.serialize_state(&state).map_err(|e| e.to_string())?;
         Ok(Some(Arc::new(bytes)))
     }
+}
+
+/// The outputs `values` that `spec`'s FMU gave for `time` are finite, or the run
+/// diverged there: a NaN or an infinity would pass into the trace, the channels and the
+/// controller's cost as a number. The error names the time the outputs belong to, the
+/// FMU's node and the first such output (in `FmuSpec::outputs` order), as the
+/// multibody model's divergence names a link or a body.
+fn finite(spec: &FmuSpec, time: SimTime, values: &[f64]) -> Result<()> {
+    let Some((var, &x)) = spec
+        .outputs
+        .iter()
+        .zip(values)
+        .find(|(_, x)| !x.is_finite())
+    else {
+        return Ok(());
+    };
+    Err(Error::Diverged(Divergence {
+        time,
+        node: spec.node + 1,
+        place: Place::FmuOutput {
+            fmu: spec.name.clone(),
+            variable: var.name.clone(),
+        },
+        what: format!("non-finite output {} = {x}", var.name),
+    }))
 }
 
 fn fmu_error(e: crate::fmu::FmuError) -> Error {

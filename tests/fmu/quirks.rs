@@ -192,3 +192,26 @@ fn a_stop_request_of_an_fmu_stepping_slower_than_the_lock_step_ends_at_its_point
     let &(t, x) = rows(&out).last().unwrap();
     assert_eq!((t, x), (0.05, 0.00125), "x = t²/2 at 50 ms");
 }
+
+#[test]
+fn a_nan_output_is_a_divergence_naming_time_node_fmu_and_variable() {
+    let dir = scratch("fmu-quirks", "nan");
+    // x turns NaN after the step ending past 50 ms: the outputs of t = 51 ms.
+    let (out, o, summary) = run(&dir, &alone(0.2, json!({"nan_at": 0.05, "F": 1.0})));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{stderr}");
+    let message = "diverged at t = 0.051000000 s on node 1, FMU 'q' output x: \
+                   non-finite output x = NaN";
+    assert!(stderr.contains(message), "{stderr}");
+    assert_eq!(summary["status"], "diverged");
+    assert_eq!(summary["error"], message);
+    let d = &summary["divergence"];
+    assert_eq!(
+        (&d["time"], &d["node"], &d["fmu_output"]),
+        (&json!(0.051), &json!(1), &json!("q.x"))
+    );
+    // The trace holds the sane steps, up to 50 ms, and no NaN.
+    let rows = rows(&out);
+    assert_eq!(rows.last().unwrap().0, 0.05);
+    assert!(rows.iter().all(|(_, x)| x.is_finite()));
+}
