@@ -12,7 +12,9 @@
 //! Both are measured exactly. For each border port (a ghosted body and the node that
 //! ghosts it) the ghosting node integrates the impulse its links put on the ghost — the
 //! ghost's momentum change over each step less its owner-side load and gravity, so the
-//! stages of any integrator are counted as they were applied — and sends the running
+//! stages of any integrator are counted as they were applied (a ghost carrying its
+//! owner's reaction answers the links with its owner's subsystem, so there the links'
+//! force itself is summed with the stages' weights) — and sends the running
 //! total with each force sample; the body's owner keeps the running total of the border
 //! forces it applied, as of each sample time, and books the difference when the sample
 //! arrives: the momentum the port has made. The brake books its impulse as it acts.
