@@ -398,8 +398,8 @@ fn a_free_spinning_ring_keeps_its_angular_momentum_and_energy() {
     // 12 bodies of 1 kg on a ring of 1.8 m links spinning at 2 rad/s, no force, on 3
     // nodes of 4 consecutive bodies, explicit Euler, 3 s. The monolithic run changes
     // |L| by +1.2 % and the kinetic energy by +2.4 % (Euler's own drift); the default
-    // must hold both within 3 % at 5 ms (at 50 ms, where the border links are lines,
-    // |L| moves 5.2 %: printed, not met).
+    // must hold both within 3 % at 5 and 10 ms (at 50 ms, where the border links are
+    // lines, |L| moves 5.05 %: printed, not met).
     let n = 12;
     let radius = 1.8 / (2.0 * (std::f64::consts::PI / n as f64).sin());
     let (mut bodies, mut links) = (Vec::new(), Vec::new());
@@ -432,7 +432,7 @@ fn a_free_spinning_ring_keeps_its_angular_momentum_and_energy() {
         l_mono.abs() < 0.03 && ke_mono.abs() < 0.03,
         "monolithic {l_mono} {ke_mono}"
     );
-    for tau in [0.005, 0.05] {
+    for tau in [0.005, 0.01, 0.02, 0.03, 0.04, 0.05] {
         let (inv, error) = run(&scene(Some(tau)));
         assert!(error.is_none(), "τ = {tau}: {error:?}");
         let (l, ke) = change(&inv);
@@ -443,7 +443,10 @@ fn a_free_spinning_ring_keeps_its_angular_momentum_and_energy() {
             100.0 * l_mono,
             100.0 * ke_mono
         );
-        if tau == 0.005 {
+        // Within 3 % to 10 ms (+1.08 %, +2.15 % measured); from 20 ms |L| leaves it
+        // (+3.29 % at 20 and 30 ms, +4.24 % at 40, +5.05 % at 50, lines from 30 ms):
+        // printed, open (method §3.1).
+        if tau <= 0.01 {
             assert!(
                 l.abs() <= 0.03 && ke.abs() <= 0.03,
                 "τ = {tau}: |L| {l:+}, KE {ke:+}"
