@@ -15,6 +15,8 @@
 //! Forks are clones of the world: they never touch the live run, whose digest is the
 //! same with or without baselines. A fork that diverges scores `+∞`.
 
+use std::sync::OnceLock;
+
 use rayon::prelude::*;
 
 use super::dsm::{Dsm, DsmConfig};
@@ -123,21 +125,32 @@ impl Experiment {
     }
 }
 
-/// Measures `x` on a fork of `world` over `[t, t_end)`.
-fn evaluate<P: Plant>(world: &P, delays: &Delays, x: &[f64], t: SimTime, t_end: SimTime) -> f64 {
+/// Measures `x` on a fork of `world` over `[t, t_end)` ([`evaluate_taus`]).
+fn evaluate<P: Plant>(
+    world: &P,
+    delays: &Delays,
+    x: &[f64],
+    (t, t_end): (SimTime, SimTime),
+    fmu_failure: &OnceLock<Error>,
+) -> f64 {
     let Some(taus) = delays.taus(x) else {
         return f64::NAN;
     };
-    evaluate_taus(world, delays, &taus, t, t_end)
+    evaluate_taus(world, delays, &taus, (t, t_end), fmu_failure)
 }
 
 /// Measures every channel at delays `taus` [s] on a fork of `world` over `[t, t_end)`.
+/// A fork that diverges or whose network cannot serve the delays costs infinity: the
+/// candidate is bad. A fork that fails in an FMU (it cannot be made because an FMU
+/// cannot save or restore its state, or an FMU call fails in it) says nothing about the
+/// candidate: the first such error goes to `fmu_failure`, and the window's caller stops
+/// the run with it rather than deciding on costs that were never measured.
 fn evaluate_taus<P: Plant>(
     world: &P,
     delays: &Delays,
     taus: &[f64],
-    t: SimTime,
-    t_end: SimTime,
+    (t, t_end): (SimTime, SimTime),
+    fmu_failure: &OnceLock<Error>,
 ) -> f64 {
     let mut fork = world.clone();
     let Ok(achieved) = fork.set_taus(t, taus, &delays.achieved(taus)) else {
@@ -148,6 +161,14 @@ fn evaluate_taus<P: Plant>(
             Some((end, cost)) if end == t_end => delays.objective(cost, &achieved),
             _ => f64::INFINITY,
         },
+        Err(Error::Fmu(why)) => {
+            let _ = fmu_failure.set(Error::Fmu(format!(
+                "{why} (measuring a candidate on a fork of the run for the window from t = \
+                 {} s)",
+                t.as_secs_f64()
+            )));
+            f64::INFINITY
+        }
         Err(_) => f64::INFINITY,
     }
 }
@@ -273,7 +294,8 @@ impl Controller {
                 break; // an FMU asked to stop: no window is left to decide
             }
             let live_world: &P = world;
-            let eval = |x: &[f64]| evaluate(live_world, &delays, x, t, t_end);
+            let fmu_failure = OnceLock::new();
+            let eval = |x: &[f64]| evaluate(live_world, &delays, x, (t, t_end), &fmu_failure);
             let surface_here = spec.surface_window == Some(t);
             let grid: Option<Vec<Candidate>> = (wants_grid || surface_here).then(|| {
                 let objectives: Vec<f64> = grid_points.par_iter().map(|x| eval(x)).collect();
@@ -355,7 +377,9 @@ impl Controller {
                 if !landscape_points.is_empty() {
                     let costs: Vec<f64> = landscape_points
                         .par_iter()
-                        .map(|taus| evaluate_taus(live_world, &delays, taus, t, t_end))
+                        .map(|taus| {
+                            evaluate_taus(live_world, &delays, taus, (t, t_end), &fmu_failure)
+                        })
                         .collect();
                     let points = landscape_points.iter().zip(costs);
                     exp.landscape = Some((
@@ -368,6 +392,9 @@ impl Controller {
                             .collect(),
                     ));
                 }
+            }
+            if let Some(e) = fmu_failure.into_inner() {
+                return Err(e);
             }
             // Every method picks a feasible point (DSM and Nelder–Mead only ask feasible
             // ones, the grid holds only feasible ones, `initial` is validated); rounding

@@ -289,7 +289,12 @@ impl Clone for FmuUnit {
     fn clone(&self) -> FmuUnit {
         let (saved, broken) = match self.capture() {
             Ok(saved) => (saved, self.broken.clone()),
-            Err(why) => (None, Some(format!("cannot fork: {why}"))),
+            Err(why) => (
+                None,
+                Some(format!(
+                    "{why}: the FMU's state cannot be carried into a fork"
+                )),
+            ),
         };
         FmuUnit {
             time: self.time,

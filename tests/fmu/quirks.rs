@@ -215,3 +215,65 @@ fn a_nan_output_is_a_divergence_naming_time_node_fmu_and_variable() {
     assert_eq!(rows.last().unwrap().0, 0.05);
     assert!(rows.iter().all(|(_, x)| x.is_finite()));
 }
+
+/// quirks.fmu as the plant `q` of the PD controller FMU over two channels, the DSM
+/// measuring every candidate on a fork (lookahead) with the no-optimization and grid
+/// baselines, its parameters `start`.
+fn controlled(start: Value) -> Value {
+    json!({
+        "name": "quirks_dsm", "seed": 1, "duration": 2.0, "dt": 0.001,
+        "fmus": [
+            {"name": "q", "path": "quirks.fmu", "node": 1, "start": start, "trace": ["x"]},
+            {"name": "ctrl", "path": "pd.fmu", "node": 2, "start": {"r": 1.0}}
+        ],
+        "channels": [
+            {"name": "sense", "tau": 0.005, "latency": 0.005},
+            {"name": "act", "tau": 0.005, "latency": 0.005}
+        ],
+        "connections": [
+            {"from": "q.x", "to": "ctrl.x", "channel": "sense"},
+            {"from": "q.v", "to": "ctrl.v", "channel": "sense"},
+            {"from": "ctrl.u", "to": "q.F", "channel": "act"}
+        ],
+        "measurement": {"period": 0.5, "signals": ["q.x"]},
+        "controller": {"method": "dsm", "problem": "up", "penalty": 1e-4,
+                       "tau_min": 0.001, "tau_max": 0.02, "initial": [0.005, 0.005],
+                       "dsm": {"size": 0.004}, "baselines": ["no_opt", "grid"],
+                       "grid_step": 0.006}
+    })
+}
+
+#[test]
+fn an_fmu_whose_state_saving_fails_stops_a_controlled_run_naming_it_and_the_call() {
+    let dir = scratch("fmu-quirks", "fork-failure");
+    build_test_fmu("pd", &dir).expect("build pd.fmu");
+    // The same scene with state saving working: the controller measures finite costs.
+    let (_, o, summary) = run(&dir, &controlled(json!({})));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(0), "{stderr}");
+    let cost = summary["mean_cost"].as_f64().unwrap();
+    assert!(cost.is_finite() && cost > 0.0, "{cost}");
+    // fmi2GetFMUstate fails: no fork can be made once the FMU has started (the first
+    // window's forks start fresh instances from the start values, as the run did), and
+    // the run says so instead of deciding on infinite costs.
+    let (out, o, summary) = run(&dir, &controlled(json!({"fail_get_state": 1})));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{stderr}");
+    let error = "error: FMU 'q': fmi2GetFMUstate returned fmi2Error at t = 0.5 s: the \
+                 FMU's state cannot be carried into a fork (measuring a candidate on a fork \
+                 of the run for the window from t = 0.5 s)";
+    assert!(stderr.contains(error), "{stderr}");
+    assert!(
+        stderr.contains("logged fmi2Error (logStatusError): the model refuses to save its state"),
+        "the FMU's own reason is printed: {stderr}"
+    );
+    assert_eq!(summary["status"], "fmu_error");
+    assert_eq!(
+        std::fs::read_to_string(out.join("epochs.csv"))
+            .unwrap()
+            .lines()
+            .count(),
+        2,
+        "a header and the first window: none was decided on unmeasured costs"
+    );
+}
