@@ -236,6 +236,7 @@ impl ModelDescription {
                 .map(|(i, n)| variable(i, n))
                 .collect::<Result<_, _>>()?,
         };
+        unique_names(&variables)?;
         let token = if fmi3 { "instantiationToken" } else { "guid" };
         Ok(ModelDescription {
             fmi_version,
@@ -402,6 +403,30 @@ fn start(kind: VarKind, text: Option<&str>, field: &str) -> Result<Option<f64>, 
 }
 
 /// A description error for `field`.
+/// Every variable's name is its own (FMI 2.0 §2.2.7, FMI 3.0 §2.4.7: names are unique):
+/// two variables of one name are refused naming both, by their positions under
+/// `<ModelVariables>` (1-based, document order, as FMI 2.0's `index` counts), since a
+/// connection, a start value or a trace column naming it could mean either.
+fn unique_names(variables: &[ScalarVariable]) -> Result<(), FmuError> {
+    let mut seen: std::collections::HashMap<&str, usize> =
+        std::collections::HashMap::with_capacity(variables.len());
+    for (i, v) in variables.iter().enumerate() {
+        if let Some(first) = seen.insert(&v.name, i) {
+            return Err(bad(
+                "ModelVariables",
+                format!(
+                    "variables {} and {} (1-based, in document order) are both named {:?}; \
+                     a variable's name must be unique",
+                    first + 1,
+                    i + 1,
+                    v.name
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 fn bad(field: &str, message: String) -> FmuError {
     FmuError::Description {
         file: "modelDescription.xml".into(),
@@ -492,6 +517,33 @@ mod tests {
         let err = err.unwrap_or_default();
         assert!(
             err.contains("'k'@valueReference") && err.contains("'-3'"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn two_variables_of_one_name_are_refused_naming_both() {
+        let xml = MINIMAL.replace("name=\"s\"", "name=\"k\"");
+        let err = ModelDescription::parse(&xml).err().map(|e| e.to_string());
+        assert_eq!(
+            err.as_deref(),
+            Some(
+                "modelDescription.xml: ModelVariables: variables 1 and 3 (1-based, in document \
+                 order) are both named \"k\"; a variable's name must be unique"
+            )
+        );
+        let fmi3 = r#"<fmiModelDescription fmiVersion="3.0" modelName="m" instantiationToken="{t}">
+  <CoSimulation modelIdentifier="m"/>
+  <ModelVariables>
+    <Float64 name="time" valueReference="0" causality="independent" variability="continuous"/>
+    <Float64 name="y" valueReference="1" causality="output" variability="continuous"/>
+    <Int32 name="y" valueReference="2" causality="output" variability="discrete"/>
+  </ModelVariables>
+</fmiModelDescription>"#;
+        let err = ModelDescription::parse(fmi3).err().map(|e| e.to_string());
+        let err = err.unwrap_or_default();
+        assert!(
+            err.contains("variables 2 and 3") && err.contains("\"y\""),
             "{err}"
         );
     }

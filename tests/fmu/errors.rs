@@ -280,3 +280,64 @@ fn a_crash_inside_an_fmu_kills_the_run_by_its_signal_and_is_no_panic() {
         assert!(!out.join(f).exists(), "{f} after a crash");
     }
 }
+
+/// pd.fmu built into `dir` from pd.xml with `from` replaced by `to` (a variant of its
+/// description; the binary is pd's).
+fn pd_variant(dir: &Path, from: &str, to: &str) {
+    let xml = std::fs::read_to_string(fmus_dir().join("pd.xml")).unwrap();
+    assert!(xml.contains(from), "pd.xml has {from}");
+    let variant = dir.join("pd_variant.xml");
+    std::fs::write(&variant, xml.replace(from, to)).unwrap();
+    crate::fmu_build::build_fmu(
+        &fmus_dir().join("pd.c"),
+        &variant,
+        "pd",
+        &dir.join("pd.fmu"),
+    )
+    .expect("build the pd variant");
+}
+
+#[test]
+fn two_variables_of_one_name_are_refused_at_load_naming_both() {
+    let dir = scratch("fmu-errors", "duplicate-names");
+    build_test_fmu("msd", &dir).unwrap();
+    // pd's input v renamed x: two variables called x (the 4th and the 5th).
+    pd_variant(&dir, "name=\"v\"", "name=\"x\"");
+    let e = error(&dir, &base());
+    assert!(
+        e.starts_with("fmus[1].path:")
+            && e.contains(
+                "ModelVariables: variables 4 and 5 (1-based, in document order) are both \
+                 named \"x\""
+            ),
+        "{e}"
+    );
+}
+
+#[test]
+fn two_connections_to_inputs_sharing_a_value_reference_are_refused_naming_both() {
+    let dir = scratch("fmu-errors", "shared-reference");
+    build_test_fmu("msd", &dir).unwrap();
+    // pd's input v given x's value reference (3): an alias of x in the FMU.
+    pd_variant(
+        &dir,
+        "name=\"v\" valueReference=\"4\"",
+        "name=\"v\" valueReference=\"3\"",
+    );
+    let mut v = base();
+    v["connections"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"from": "plant.v", "to": "ctrl.v", "channel": "c"}));
+    let e = error(&dir, &v);
+    assert_eq!(
+        e,
+        "connections[2].to: input \"v\" of FMU \"ctrl\" has value reference 3, as input \
+         \"x\" fed by connections[0] does: the FMU holds one value for both, so one of the \
+         two connections would be lost"
+    );
+    // Alone, each of the two inputs can be fed.
+    let alone = set(base(), "/connections/0/to", json!("ctrl.v"));
+    std::fs::write(dir.join("scenario.json"), alone.to_string()).unwrap();
+    dsmcosim::scenario::load(&dir.join("scenario.json")).expect("one connection to v");
+}

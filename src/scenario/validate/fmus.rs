@@ -82,6 +82,10 @@ pub(super) fn fmus(
     let mut wired_in: Vec<Vec<String>> = vec![Vec::new(); list.len()];
     let mut ends = Vec::with_capacity(connections.len());
     let mut fed: BTreeMap<String, usize> = BTreeMap::new();
+    // (FMU, value reference) of each input a connection feeds: the connection and the
+    // input's name. Two inputs that share a value reference are one variable in the
+    // FMU, so two connections to them would overwrite each other.
+    let mut fed_refs: BTreeMap<(usize, u32), (usize, String)> = BTreeMap::new();
     for (i, c) in connections.iter().enumerate() {
         let path = format!("connections[{i}]");
         let from_path = format!("{path}.from");
@@ -100,6 +104,22 @@ pub(super) fn fmus(
             None => {
                 let (f, inp) = endpoint(&to_path, &c.to, &names, &loaded)?;
                 check_causality(&to_path, &list[f].name, inp, Causality::Input)?;
+                let vr = inp.value_reference;
+                if let Some((first, other)) = fed_refs.get(&(f, vr)) {
+                    if *other != inp.name {
+                        return Err(Error::invalid(
+                            to_path,
+                            format!(
+                                "input {:?} of FMU {:?} has value reference {vr}, as input \
+                                 {other:?} fed by connections[{first}] does: the FMU holds \
+                                 one value for both, so one of the two connections would be \
+                                 lost",
+                                inp.name, list[f].name
+                            ),
+                        ));
+                    }
+                }
+                fed_refs.insert((f, vr), (i, inp.name.clone()));
                 wired_in[f].push(inp.name.clone());
                 End::Fmu(f, inp.name.clone())
             }
