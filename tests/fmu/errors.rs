@@ -341,3 +341,28 @@ fn two_connections_to_inputs_sharing_a_value_reference_are_refused_naming_both()
     std::fs::write(dir.join("scenario.json"), alone.to_string()).unwrap();
     dsmcosim::scenario::load(&dir.join("scenario.json")).expect("one connection to v");
 }
+
+#[test]
+fn a_misspelt_channel_is_named_as_unknown_with_the_nearest_name() {
+    let dir = scratch("fmu-errors", "misspelt-channel");
+    for id in ["msd", "pd"] {
+        build_test_fmu(id, &dir).unwrap();
+    }
+    // Both connections misspell the one channel: it is unused, yet the error is the
+    // connection's, not "channel "sense" carries no message".
+    let mut v = set(base(), "/channels/0/name", json!("sense"));
+    for k in 0..2 {
+        v = set(v, &format!("/connections/{k}/channel"), json!("sens"));
+    }
+    assert_eq!(
+        error(&dir, &v),
+        "connections[0].channel: unknown channel \"sens\" (channels: sense); did you mean \
+         \"sense\"?"
+    );
+    // Nothing close: the channels listed, no guess.
+    let v = set(v, "/connections/0/channel", json!("actuator"));
+    assert_eq!(
+        error(&dir, &v),
+        "connections[0].channel: unknown channel \"actuator\" (channels: sense)"
+    );
+}

@@ -222,6 +222,32 @@ fn channel_borders(
     Ok(out)
 }
 
+/// `connections[k].channel` names `name`, which no channel has: the channels listed,
+/// and the nearest name when one is close (at most a third of its letters differ, at
+/// least one, as for a mistyped field).
+fn unknown_channel(k: usize, name: &str, channels: &[ChannelSpec]) -> Error {
+    let known: Vec<&str> = channels.iter().map(|c| c.name.as_str()).collect();
+    let nearest = known
+        .iter()
+        .map(|c| (strsim::damerau_levenshtein(name, c), *c))
+        .min();
+    let hint = match nearest {
+        Some((d, c)) if d <= (c.chars().count() / 3).max(1) => format!("; did you mean {c:?}?"),
+        _ => String::new(),
+    };
+    Error::invalid(
+        format!("connections[{k}].channel"),
+        format!(
+            "unknown channel {name:?} (channels: {}){hint}",
+            if known.is_empty() {
+                "none".to_string()
+            } else {
+                known.join(", ")
+            }
+        ),
+    )
+}
+
 /// `channels[i].kinds`: non-empty, no repeats.
 fn kinds(path: &str, list: &[DataKindFile]) -> Result<Vec<DataKind>> {
     if list.is_empty() {
@@ -254,6 +280,13 @@ fn routes(
     borders: &BTreeSet<(usize, usize)>,
     signals: &[&str],
 ) -> Result<()> {
+    // A connection naming no channel first: otherwise a misspelt name would surface as
+    // the channel it meant carrying no message.
+    for (k, name) in signals.iter().enumerate() {
+        if !channels.iter().any(|c| c.name == *name) {
+            return Err(unknown_channel(k, name, channels));
+        }
+    }
     let named = |i: usize| format!("channels[{i}] {:?}", channels[i].name);
     let mut used: Vec<bool> = channels
         .iter()
