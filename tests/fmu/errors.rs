@@ -366,3 +366,26 @@ fn a_misspelt_channel_is_named_as_unknown_with_the_nearest_name() {
         "connections[0].channel: unknown channel \"actuator\" (channels: sense)"
     );
 }
+
+#[test]
+fn a_missing_test_fmu_says_how_to_build_it_into_its_folder() {
+    let dir = scratch("fmu-errors", "missing-test-fmu");
+    build_test_fmu("pd", &dir).unwrap();
+    // As on a fresh clone: a shipped scene reads fmu/<stem>.fmu beside it, not built yet.
+    for stem in crate::fmu_build::TEST_FMUS {
+        let v = set(base(), "/fmus/0/path", json!(format!("fmu/{stem}.fmu")));
+        let e = error(&dir, &v);
+        let build = format!(
+            "build them into that folder with `cargo run --release --example build_fmus -- {}` \
+             (needs a C compiler)",
+            dir.join("fmu").display()
+        );
+        assert!(e.starts_with("fmus[0].path:") && e.contains(&build), "{e}");
+    }
+    // A missing FMU of the user's own: no such hint.
+    let e = error(&dir, &set(base(), "/fmus/0/path", json!("fmu/mine.fmu")));
+    assert!(
+        e.starts_with("fmus[0].path:") && !e.contains("build_fmus"),
+        "{e}"
+    );
+}

@@ -320,6 +320,29 @@ fn name(path: &str, name: &str) -> Result<()> {
     Ok(())
 }
 
+/// The FMUs that `cargo run --release --example build_fmus -- DIR` builds from
+/// `tests/fmus/` (`TEST_FMUS` of `tests/support/fmu_build.rs`): the shipped scenes read
+/// them from `scenarios/fmu/`, which a fresh clone does not hold.
+const BUILT_TEST_FMUS: [&str; 5] = ["msd.fmu", "pd.fmu", "faulty.fmu", "msd3.fmu", "quirks.fmu"];
+
+/// For a missing file that is one of [`BUILT_TEST_FMUS`], how to build it into the
+/// folder it is looked for in; else nothing.
+fn build_hint(resolved: &Path) -> String {
+    let name = resolved.file_name().and_then(|n| n.to_str());
+    if resolved.exists() || !name.is_some_and(|n| BUILT_TEST_FMUS.contains(&n)) {
+        return String::new();
+    }
+    let dir = match resolved.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.display().to_string(),
+        _ => ".".to_string(),
+    };
+    format!(
+        "; it is one of dsmcosim's test FMUs, which a checkout does not hold: build them \
+         into that folder with `cargo run --release --example build_fmus -- {dir}` (needs a C \
+         compiler)"
+    )
+}
+
 /// Unpacks and describes `fmus[i]`, checking its node and step.
 fn load(
     path: &str,
@@ -375,8 +398,12 @@ fn load(
         Some(dir) if file.is_relative() => dir.join(file),
         _ => file.to_path_buf(),
     };
-    let fmu = Fmu::load(&f.name, &resolved)
-        .map_err(|e| Error::invalid(format!("{path}.path"), e.to_string()))?;
+    let fmu = Fmu::load(&f.name, &resolved).map_err(|e| {
+        Error::invalid(
+            format!("{path}.path"),
+            format!("{e}{}", build_hint(&resolved)),
+        )
+    })?;
     Ok((fmu, resolved))
 }
 
