@@ -96,7 +96,10 @@ fn a_fork_of_an_fmu_that_cannot_save_its_state_fails_naming_it() {
     live.advance_to(at(0.1), &mut ()).unwrap();
     let mut fork = live.clone();
     let e = fork.advance_to(at(0.2), &mut ()).unwrap_err().to_string();
-    assert!(e.contains("cannot be carried into a fork") && e.contains("'plant'"), "{e}");
+    assert!(
+        e.contains("cannot be carried into a fork") && e.contains("'plant'"),
+        "{e}"
+    );
     assert!(e.contains("canGetAndSetFMUstate"), "{e}");
     // The live run is unaffected.
     live.advance_to(at(0.2), &mut ()).unwrap();
