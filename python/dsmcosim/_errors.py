@@ -48,14 +48,16 @@ class SimulationError(DsmcosimError):
 class DivergedError(SimulationError):
     """A run whose state diverged: at `time` [s] on computing node `node`, in link
     `link` (`"L3"`), or joint `link` (`"J2"`) row `row`, or body `body` (`"B5"`) for a
-    body without links; `what` says what was seen (`|w| = 1.3 m > bound 1 m`). The
-    outputs up to the divergence are written."""
+    body without links, or an FMU's output `fmu_output` (`"plant.x"`) that is not a
+    finite number; `what` says what was seen (`|w| = 1.3 m > bound 1 m`). The outputs
+    up to the divergence are written."""
 
     time: float = 0.0
     node: int = 0
     link: Optional[str] = None
     row: Optional[int] = None
     body: Optional[str] = None
+    fmu_output: Optional[str] = None
     what: str = ""
 
 

@@ -80,14 +80,22 @@ fn build_error(py: Python<'_>, e: &dsmcosim::Error) -> PyResult<PyErr> {
         E::Diverged(d) => {
             value.setattr("time", d.time.as_secs_f64())?;
             value.setattr("node", d.node)?;
-            let (link, row, body) = match d.place {
-                Place::Link(k) => (Some(format!("L{k}")), None, None),
-                Place::JointRow { joint, row } => (Some(format!("J{joint}")), Some(row), None),
-                Place::Body(id) => (None, None, Some(format!("B{id}"))),
-            };
+            let (mut link, mut row, mut body, mut fmu_output) = (None, None, None, None);
+            match &d.place {
+                Place::Link(k) => link = Some(format!("L{k}")),
+                Place::JointRow { joint, row: r } => {
+                    link = Some(format!("J{joint}"));
+                    row = Some(*r);
+                }
+                Place::Body(id) => body = Some(format!("B{id}")),
+                Place::FmuOutput { fmu, variable } => {
+                    fmu_output = Some(format!("{fmu}.{variable}"))
+                }
+            }
             value.setattr("link", link)?;
             value.setattr("row", row)?;
             value.setattr("body", body)?;
+            value.setattr("fmu_output", fmu_output)?;
             value.setattr("what", d.what.clone())?;
         }
         E::Io { source, .. } => {

@@ -448,6 +448,21 @@ def test_observe_reads_an_fmus_outputs(tmp_path):
     assert seen.signals and all(row[name] == value for name, value in seen.signals.items())
 
 
+def test_an_fmu_output_that_is_not_a_number_is_a_divergence_naming_it(tmp_path):
+    fmu = SCENARIOS / "fmu" / "quirks.fmu"
+    if not fmu.is_file():
+        pytest.skip("the test FMUs are built by `cargo run --release --example build_fmus "
+                    "-- scenarios/fmu`")
+    scene = {"name": "quirks", "seed": 1, "duration": 0.2, "dt": 0.001,
+             "fmus": [{"name": "q", "path": str(fmu), "start": {"nan_at": 0.05, "F": 1.0},
+                       "trace": ["x", "v"]}]}
+    with pytest.raises(dsmcosim.DivergedError) as caught:
+        dsmcosim.run(scene, tmp_path / "out")
+    e = caught.value
+    assert e.fmu_output == "q.x" and e.link is None and e.body is None, vars(e)
+    assert 0.05 <= e.time <= 0.06 and e.exit_code == 3, vars(e)
+
+
 def test_observe_lists_the_last_delivery_on_every_route():
     sim = dsmcosim.CoSim(FIXED, duration=1.0)
     sim.advance(0.1)
