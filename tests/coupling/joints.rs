@@ -39,6 +39,14 @@ fn double_pendulum_at(split: Option<(&str, f64)>, dt: f64) -> Value {
     v
 }
 
+/// The scene `v` under `law`: the default (null) or a stabilizer by name.
+fn under(law: &Value, mut v: Value) -> Value {
+    if !law.is_null() {
+        v["stabilizer"] = law.clone();
+    }
+    v
+}
+
 /// Positions and total energy (kinetic, rotational included, plus gravity's potential)
 /// per step.
 #[derive(Default)]
@@ -405,12 +413,7 @@ fn drifts(v: &Value) -> (f64, f64, f64) {
 #[test]
 fn a_free_chain_split_at_a_border_joint_keeps_its_invariants() {
     for law in [Value::Null, json!({"kind": "smc"})] {
-        let with = |mut v: Value| {
-            if !law.is_null() {
-                v["stabilizer"] = law.clone();
-            }
-            v
-        };
+        let with = |v: Value| under(&law, v);
         let (p0, l0, e0) = drifts(&with(free_chain(None)));
         for tau in [0.001, 0.005, 0.02] {
             let (p, l, e) = drifts(&with(free_chain(Some(tau))));
@@ -445,12 +448,7 @@ fn a_free_chain_split_at_a_border_joint_keeps_its_invariants() {
 #[test]
 fn a_double_pendulum_split_at_its_middle_joint_keeps_its_energy_under_delay() {
     for law in [Value::Null, json!({"kind": "smc"})] {
-        let with = |mut v: Value| {
-            if !law.is_null() {
-                v["stabilizer"] = law.clone();
-            }
-            v
-        };
+        let with = |v: Value| under(&law, v);
         let mono = record(&with(double_pendulum(None)));
         let mono_drift = energy_drift(&mono);
         for (scheme, tau) in [
@@ -497,12 +495,7 @@ fn platform_and_rotor(split: Option<f64>) -> Value {
 #[test]
 fn a_hinge_across_a_partition_keeps_its_axes_and_the_invariants() {
     for law in [Value::Null, json!({"kind": "smc"})] {
-        let with = |mut v: Value| {
-            if !law.is_null() {
-                v["stabilizer"] = law.clone();
-            }
-            v
-        };
+        let with = |v: Value| under(&law, v);
         let (p0, l0, e0) = drifts(&with(platform_and_rotor(None)));
         for tau in [0.001, 0.005, 0.02] {
             let v = with(platform_and_rotor(Some(tau)));
@@ -566,10 +559,7 @@ fn a_double_pendulum_split_at_a_joint_keeps_second_order_in_dt() {
         for dt in [0.002, 0.001, 0.0005] {
             let with = |mut v: Value| {
                 v["duration"] = json!(1.0);
-                if !law.is_null() {
-                    v["stabilizer"] = law.clone();
-                }
-                v
+                under(&law, v)
             };
             let mono = record(&with(double_pendulum_at(None, dt)));
             let split = record(&with(double_pendulum_at(Some(("predict", dt)), dt)));
