@@ -50,16 +50,19 @@ pub mod fmi3;
 pub mod instance;
 pub mod loaded;
 pub mod log;
+pub mod value;
 
 use std::path::PathBuf;
 
 pub use archive::{unpack, unpack_with_limits, Limits, Unpacked};
 pub use description::{
-    Causality, CoSimulation, ModelDescription, ScalarVariable, VarKind, Variability,
+    Causality, CoSimulation, Dimension, ModelDescription, ScalarVariable, VarKind, Variability,
+    MAX_ARRAY_ELEMENTS,
 };
 pub use instance::{FmuState, Instance, StepEnd};
 pub use loaded::Fmu;
 pub use log::{FmuLog, LogEntry};
+pub use value::{Value, MAX_VALUE_BYTES};
 
 /// Everything that can go wrong while unpacking, describing, loading or driving an FMU.
 #[derive(Debug, thiserror::Error)]
@@ -219,6 +222,19 @@ pub enum FmuError {
         value_reference: u32,
         /// The value read.
         value: i64,
+    },
+    /// A value an FMU gave (or was to be given) is not one of its variable's type: a
+    /// null String or Binary pointer, a value outside the type's range.
+    #[error("FMU '{fmu}': {function}, value reference {value_reference}: {message}")]
+    BadValue {
+        /// The FMU instance's name.
+        fmu: String,
+        /// The FMI function.
+        function: &'static str,
+        /// The variable's value reference.
+        value_reference: u32,
+        /// What is wrong with the value.
+        message: String,
     },
     /// The FMU's description does not declare a capability the call needs; the FMU was
     /// not called.

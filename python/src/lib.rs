@@ -809,7 +809,8 @@ impl PyCoSim {
     /// co-simulation is untouched): a dict of `time` [s], `bodies` (ids), `p`, `v`,
     /// `omega` ([x, y, z] per body), `q` ([w, x, y, z] per body; empty for point
     /// masses), `rows` (names), `w` [m] and `f` [N] per row, `max_w` [m], and `signals`
-    /// (name → value of each traced FMU output).
+    /// (name → value of each traced FMU output: a float, an int, a bool, a str or bytes
+    /// by its FMI type, an array element per name `y[i]`).
     fn observe<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let seen = py
             .detach(|| self.world.observe())
@@ -839,7 +840,17 @@ impl PyCoSim {
         out.set_item("max_w", seen.max_w)?;
         let signals = PyDict::new(py);
         for (name, value) in scenario.signal_names().into_iter().zip(seen.signals) {
-            signals.set_item(name, value)?;
+            // Each FMU output as the Python value of its FMI type.
+            use dsmcosim::fmu::Value;
+            match value {
+                Value::Float(x) => signals.set_item(name, x)?,
+                Value::Float32(x) => signals.set_item(name, f64::from(x))?,
+                Value::Int(i) => signals.set_item(name, i)?,
+                Value::UInt(u) => signals.set_item(name, u)?,
+                Value::Bool(b) => signals.set_item(name, b)?,
+                Value::Text(t) => signals.set_item(name, t)?,
+                Value::Bytes(b) => signals.set_item(name, PyBytes::new(py, &b))?,
+            }
         }
         out.set_item("signals", signals)?;
         let channels = self.world.channels();

@@ -26,11 +26,11 @@ use std::sync::{Arc, Mutex};
 
 use super::unit::Unit;
 use crate::error::{Divergence, Error, Place, Result};
-use crate::fmu::{Fmu, Instance, StepEnd};
+use crate::fmu::{Fmu, Instance, StepEnd, Value, VarKind};
 use crate::kernel::SimTime;
 use crate::network::route::Route;
 use crate::network::{Message, Payload};
-use crate::scenario::model::{FmuSpec, FmuValueKind, Scenario, SignalSink, SignalSource};
+use crate::scenario::model::{FmuSpec, FmuVar, Scenario, SignalSink, SignalSource};
 
 /// One FMU's place in the world: its live instance (not in a fork until its first
 /// event) and what the co-simulation holds of it.
@@ -38,13 +38,14 @@ pub struct FmuUnit {
     /// The FMU's communication time: it has stepped up to here.
     time: SimTime,
     /// The outputs channels and the trace see (those at the last communication point
-    /// the lock-step has reached), in `FmuSpec::outputs` order.
-    published: Vec<f64>,
+    /// the lock-step has reached), in `FmuSpec::outputs` order: each output's values
+    /// (one for a scalar, an array's elements in row-major order).
+    published: Vec<Vec<Value>>,
     /// The outputs at `time`, published when the lock-step reaches it.
-    pending: Vec<f64>,
+    pending: Vec<Vec<Value>>,
     /// The inputs as last delivered (their start values before), in `FmuSpec::inputs`
     /// order.
-    inputs: Vec<f64>,
+    inputs: Vec<Value>,
     /// A state to restore when the instance is made (a fork's or a resumed run's).
     saved: Option<Arc<Vec<u8>>>,
     /// Why this fork cannot run (its source could not hand over its state).
@@ -56,10 +57,82 @@ pub struct FmuUnit {
     fmu: Option<Arc<Fmu>>,
     /// The instance; a mutex so that a fork (`&self`) can ask it for its state.
     live: Option<Mutex<Instance>>,
-    /// The value references of `FmuSpec::outputs` and `inputs`, gathered once when the
-    /// instance is made, for the calls of every step.
-    output_vrs: Vec<u32>,
-    input_vrs: Vec<u32>,
+    /// `FmuSpec::outputs` and `inputs` grouped by type, gathered once when the instance
+    /// is made, for the calls of every step.
+    reads: Vec<Group>,
+    writes: Vec<Group>,
+    /// The values of one read, reused.
+    scratch: Vec<Value>,
+}
+
+/// The variables of one type that one FMI call reads or sets.
+#[derive(Debug, Clone, Default)]
+struct Group {
+    kind: Option<VarKind>,
+    vrs: Vec<u32>,
+    /// The values in all (an array counts its elements).
+    count: usize,
+    /// The index (into `FmuSpec::outputs` or `inputs`) of each variable.
+    members: Vec<usize>,
+}
+
+/// `vars` grouped by type, in order of first appearance (the calls' order).
+fn groups(vars: &[FmuVar]) -> Vec<Group> {
+    let mut out: Vec<Group> = Vec::new();
+    for (k, v) in vars.iter().enumerate() {
+        let g = match out.iter().position(|g| g.kind == Some(v.kind)) {
+            Some(i) => &mut out[i],
+            None => {
+                out.push(Group {
+                    kind: Some(v.kind),
+                    ..Group::default()
+                });
+                out.last_mut().expect("ok: just pushed")
+            }
+        };
+        g.vrs.push(v.vr);
+        g.count += v.len();
+        g.members.push(k);
+    }
+    out
+}
+
+/// Each output's values before anything is read: its start value, or an array's
+/// elements at zero.
+fn initial(outputs: &[FmuVar]) -> Vec<Vec<Value>> {
+    outputs
+        .iter()
+        .map(|v| {
+            if v.shape.is_empty() {
+                vec![v.start.clone()]
+            } else {
+                vec![Value::zero(v.kind); v.len()]
+            }
+        })
+        .collect()
+}
+
+/// Reads every output of `reads` into `into` (`scratch` holds one call's values).
+fn read(
+    inst: &Instance,
+    reads: &[Group],
+    scratch: &mut Vec<Value>,
+    into: &mut [Vec<Value>],
+) -> std::result::Result<(), crate::fmu::FmuError> {
+    for g in reads {
+        let kind = g.kind.expect("ok: every group has its type");
+        scratch.clear();
+        inst.get_values(kind, &g.vrs, g.count, scratch)?;
+        let mut values = scratch.drain(..);
+        for &k in &g.members {
+            for slot in into[k].iter_mut() {
+                if let Some(v) = values.next() {
+                    *slot = v;
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 impl std::fmt::Debug for FmuUnit {
@@ -76,19 +149,20 @@ impl std::fmt::Debug for FmuUnit {
 impl FmuUnit {
     /// The unit of `spec`, not instantiated yet.
     pub fn new(spec: &FmuSpec) -> FmuUnit {
-        let starts: Vec<f64> = spec.outputs.iter().map(|v| v.start).collect();
+        let starts = initial(&spec.outputs);
         FmuUnit {
             time: SimTime::ZERO,
             published: starts.clone(),
             pending: starts,
-            inputs: spec.inputs.iter().map(|v| v.start).collect(),
+            inputs: spec.inputs.iter().map(|v| v.start.clone()).collect(),
             saved: None,
             broken: None,
             stop: None,
             fmu: None,
             live: None,
-            output_vrs: Vec::new(),
-            input_vrs: Vec::new(),
+            reads: Vec::new(),
+            writes: Vec::new(),
+            scratch: Vec::new(),
         }
     }
 
@@ -109,22 +183,35 @@ impl FmuUnit {
         self.fmu.as_ref().map(|f| f.messages()).unwrap_or_default()
     }
 
-    /// Output `k` as channels and the trace see it.
-    pub fn output(&self, k: usize) -> f64 {
-        self.published[k]
+    /// Scalar output `k` as channels and the trace see it.
+    pub fn output(&self, k: usize) -> &Value {
+        &self.published[k][0]
     }
 
-    /// The traced outputs, appended to `out`.
-    pub fn traced(&self, spec: &FmuSpec, out: &mut Vec<f64>) {
-        for (v, &x) in spec.outputs.iter().zip(&self.published) {
+    /// Scalar output `k` as a number, for a cost (which validation lets name numbers
+    /// and Booleans only).
+    pub fn output_number(&self, k: usize) -> f64 {
+        self.output(k).as_f64().unwrap_or(f64::NAN)
+    }
+
+    /// Every output's values as channels and the trace see them, in `FmuSpec::outputs`
+    /// order, an array's elements in row-major order.
+    pub fn outputs(&self) -> impl Iterator<Item = &Value> {
+        self.published.iter().flatten()
+    }
+
+    /// The traced outputs' values (an array's elements in row-major order), appended to
+    /// `out`.
+    pub fn traced(&self, spec: &FmuSpec, out: &mut Vec<Value>) {
+        for (v, x) in spec.outputs.iter().zip(&self.published) {
             if v.traced {
-                out.push(x);
+                out.extend(x.iter().cloned());
             }
         }
     }
 
     /// A delivery: input `k` holds `value` from the next communication point on.
-    pub fn set_input(&mut self, k: usize, value: f64) {
+    pub fn set_input(&mut self, k: usize, value: Value) {
         self.inputs[k] = value;
     }
 
@@ -157,19 +244,15 @@ impl FmuUnit {
         // Kept before the instance is made, so what the FMU logs while failing to
         // instantiate or initialize reaches summary.json.
         self.fmu = Some(Arc::clone(&fmu));
-        self.output_vrs = spec.outputs.iter().map(|v| v.vr).collect();
-        self.input_vrs = spec.inputs.iter().map(|v| v.vr).collect();
+        self.reads = groups(&spec.outputs);
+        self.writes = groups(&spec.inputs);
         let mut inst = fmu
             .instantiate(&spec.name, spec.logging)
             .map_err(fmu_error)?;
         inst.setup_experiment(0.0, None).map_err(fmu_error)?;
         for s in &spec.start {
-            match s.kind {
-                FmuValueKind::Real => inst.set_real(&[s.vr], &[s.value]),
-                FmuValueKind::Integer => inst.set_integer(&[s.vr], &[s.value as i32]),
-                FmuValueKind::Boolean => inst.set_boolean(&[s.vr], &[s.value != 0.0]),
-            }
-            .map_err(fmu_error)?;
+            inst.set_values(s.kind, &[s.vr], std::slice::from_ref(&s.value))
+                .map_err(fmu_error)?;
         }
         inst.enter_initialization_mode().map_err(fmu_error)?;
         inst.exit_initialization_mode().map_err(fmu_error)?;
@@ -179,10 +262,10 @@ impl FmuUnit {
                 inst.set_state(&state).map_err(fmu_error)?;
             }
             None => {
-                inst.get_real(&self.output_vrs, &mut self.pending)
+                read(&inst, &self.reads, &mut self.scratch, &mut self.pending)
                     .map_err(fmu_error)?;
                 finite(spec, self.time, &self.pending)?;
-                self.published.copy_from_slice(&self.pending);
+                self.published.clone_from(&self.pending);
             }
         }
         self.live = Some(Mutex::new(inst));
@@ -204,8 +287,12 @@ impl FmuUnit {
                 .unwrap_or_else(|poisoned| poisoned.into_inner());
             // The inputs hold over the lock-step: set once for all its communication
             // steps.
-            if !self.input_vrs.is_empty() {
-                inst.set_real(&self.input_vrs, &self.inputs)
+            for g in &self.writes {
+                let kind = g.kind.expect("ok: every group has its type");
+                self.scratch.clear();
+                let held = g.members.iter().map(|&k| self.inputs[k].clone());
+                self.scratch.extend(held);
+                inst.set_values(kind, &g.vrs, &self.scratch)
                     .map_err(fmu_error)?;
             }
             while self.time < end {
@@ -217,7 +304,7 @@ impl FmuUnit {
                     // stays at the point before, whose outputs are read already.
                     if reached >= from + over {
                         self.time = SimTime(self.time.0.saturating_add(h.0));
-                        inst.get_real(&self.output_vrs, &mut self.pending)
+                        read(inst, &self.reads, &mut self.scratch, &mut self.pending)
                             .map_err(fmu_error)?;
                         finite(spec, self.time, &self.pending)?;
                     }
@@ -227,13 +314,12 @@ impl FmuUnit {
                 self.time = SimTime(self.time.0.saturating_add(h.0));
             }
             if self.stop.is_none() {
-                inst.get_real(&self.output_vrs, &mut self.pending)
-                    .map_err(fmu_error)?;
+                read(inst, &self.reads, &mut self.scratch, &mut self.pending).map_err(fmu_error)?;
                 finite(spec, self.time, &self.pending)?;
             }
         }
         if self.time == end {
-            self.published.copy_from_slice(&self.pending);
+            self.published.clone_from(&self.pending);
         }
         Ok(())
     }
@@ -256,26 +342,26 @@ impl FmuUnit {
 /// The outputs `values` that `spec`'s FMU gave for `time` are finite, or the run
 /// diverged there: a NaN or an infinity would pass into the trace, the channels and the
 /// controller's cost as a number. The error names the time the outputs belong to, the
-/// FMU's node and the first such output (in `FmuSpec::outputs` order), as the
-/// multibody model's divergence names a link or a body.
-fn finite(spec: &FmuSpec, time: SimTime, values: &[f64]) -> Result<()> {
-    let Some((var, &x)) = spec
-        .outputs
-        .iter()
-        .zip(values)
-        .find(|(_, x)| !x.is_finite())
-    else {
-        return Ok(());
-    };
-    Err(Error::Diverged(Divergence {
-        time,
-        node: spec.node + 1,
-        place: Place::FmuOutput {
-            fmu: spec.name.clone(),
-            variable: var.name.clone(),
-        },
-        what: format!("non-finite output {} = {x}", var.name),
-    }))
+/// FMU's node and the first such output (in `FmuSpec::outputs` order; an array's
+/// element as its trace column names it, `y[2]`), as the multibody model's divergence
+/// names a link or a body.
+fn finite(spec: &FmuSpec, time: SimTime, values: &[Vec<Value>]) -> Result<()> {
+    for (var, x) in spec.outputs.iter().zip(values) {
+        let Some(e) = x.iter().position(Value::is_non_finite) else {
+            continue;
+        };
+        let variable = var.element_names().swap_remove(e);
+        return Err(Error::Diverged(Divergence {
+            time,
+            node: spec.node + 1,
+            place: Place::FmuOutput {
+                fmu: spec.name.clone(),
+                variable: variable.clone(),
+            },
+            what: format!("non-finite output {variable} = {}", x[e]),
+        }));
+    }
+    Ok(())
 }
 
 fn fmu_error(e: crate::fmu::FmuError) -> Error {
@@ -306,8 +392,9 @@ impl Clone for FmuUnit {
             stop: self.stop.clone(),
             fmu: self.fmu.clone(),
             live: None,
-            output_vrs: Vec::new(),
-            input_vrs: Vec::new(),
+            reads: Vec::new(),
+            writes: Vec::new(),
+            scratch: Vec::new(),
         }
     }
 }
@@ -316,9 +403,9 @@ impl Clone for FmuUnit {
 #[derive(serde::Serialize, serde::Deserialize)]
 struct Stored {
     time: SimTime,
-    published: Vec<f64>,
-    pending: Vec<f64>,
-    inputs: Vec<f64>,
+    published: Vec<Vec<Value>>,
+    pending: Vec<Vec<Value>>,
+    inputs: Vec<Value>,
     state: Option<Vec<u8>>,
 }
 
@@ -352,8 +439,9 @@ impl<'de> serde::Deserialize<'de> for FmuUnit {
             stop: None,
             fmu: None,
             live: None,
-            output_vrs: Vec::new(),
-            input_vrs: Vec::new(),
+            reads: Vec::new(),
+            writes: Vec::new(),
+            scratch: Vec::new(),
         })
     }
 }
@@ -370,18 +458,23 @@ impl Unit for FmuUnit {
         scenario: &Scenario,
     ) -> Option<Message> {
         let connection = route.body;
-        let SignalSource::Fmu { output, .. } = scenario.connections[connection].from else {
+        let SignalSource::Fmu { fmu, output } = scenario.connections[connection].from else {
             return None;
         };
-        let value = self.output(output);
+        let kind = scenario.fmus[fmu].outputs[output].kind;
+        let value = self
+            .output(output)
+            .to_carrier(kind)
+            .expect("ok: validation lets only numbers and Booleans into connections");
         let payload = Payload::Signal { connection, value };
         Some(Message::on(route, channel, t, payload, None))
     }
 
     fn deliver(&mut self, msg: &Message, _state_time: SimTime, scenario: &Scenario) {
         if let Payload::Signal { connection, value } = msg.payload {
-            if let SignalSink::Fmu { input, .. } = scenario.connections[connection].to {
-                self.set_input(input, value);
+            if let SignalSink::Fmu { fmu, input } = scenario.connections[connection].to {
+                let kind = scenario.fmus[fmu].inputs[input].kind;
+                self.set_input(input, Value::from_carrier(kind, value));
             }
         }
     }

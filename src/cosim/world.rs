@@ -47,9 +47,9 @@ pub struct StepValues<'a> {
     /// The bodies (masses and inertias, for [`StepValues::invariants`]).
     pub bodies: &'a [BodySpec],
     /// The traced FMU outputs at this step, FMU by FMU in scenario order (each FMU's
-    /// value at its last communication point at or before this step); empty without
-    /// FMUs.
-    pub signals: &'a [f64],
+    /// value at its last communication point at or before this step, of its FMI type;
+    /// an array's elements in row-major order); empty without FMUs.
+    pub signals: &'a [crate::fmu::Value],
 }
 
 impl StepValues<'_> {
@@ -81,7 +81,7 @@ pub struct Observation {
     /// Largest `|w|` [m] (0 without rows).
     pub max_w: f64,
     /// The traced FMU outputs, in trace column order.
-    pub signals: Vec<f64>,
+    pub signals: Vec<crate::fmu::Value>,
 }
 
 /// The observer of [`CoSim::observe`]'s fork: keeps the first step's values.
@@ -298,7 +298,7 @@ pub struct CoSim {
     /// The FMUs, in scenario order.
     fmus: Vec<FmuUnit>,
     /// The traced FMU outputs of the current step (see [`StepValues::signals`]).
-    signals: Vec<f64>,
+    signals: Vec<crate::fmu::Value>,
     /// An FMU asked to end the run: it ends after the step at this time. Not in a
     /// checkpoint: none is written once a run has stopped.
     #[serde(skip)]
@@ -484,12 +484,10 @@ impl CoSim {
         &self.nodes
     }
 
-    /// FMU `f`'s outputs (`FmuSpec::outputs` order) as channels and the trace see them
-    /// now.
-    pub fn fmu_outputs(&self, f: usize) -> Vec<f64> {
-        (0..self.scenario.fmus[f].outputs.len())
-            .map(|k| self.fmus[f].output(k))
-            .collect()
+    /// FMU `f`'s outputs (`FmuSpec::outputs` order, an array's elements in row-major
+    /// order) as channels and the trace see them now.
+    pub fn fmu_outputs(&self, f: usize) -> Vec<crate::fmu::Value> {
+        self.fmus[f].outputs().cloned().collect()
     }
 
     /// What FMU `f` logged at warning and above (every instance of it, this world's and
@@ -1073,7 +1071,8 @@ impl CoSim {
             // as the links' cost takes their w.
             let fmus = &self.fmus;
             let signals = self.scenario.cost_signals.iter();
-            self.meter.add(signals.map(|&(f, k)| fmus[f].output(k)));
+            self.meter
+                .add(signals.map(|&(f, k)| fmus[f].output_number(k)));
         }
         let (dt, scenario) = (self.scenario.dt, &*self.scenario);
         Unit::finish_steps(&mut self.fmus, t, dt, scenario, false)?;

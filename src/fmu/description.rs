@@ -14,15 +14,16 @@
 //! | state capabilities | `canGetAndSetFMUstate`, `canSerializeFMUstate` | `canGetAndSetFMUState`, `canSerializeFMUState` |
 //! | a variable | `<ScalarVariable …><Real start/></ScalarVariable>` | `<Float64 … start/>` |
 //!
-//! FMI 3.0 types map onto [`VarKind`]: Float64 → `Real`, Int32 → `Integer`, Boolean →
-//! `Boolean`, String → `String`, Enumeration → `Enumeration` (an `Int64` at FMI 3.0's
-//! ABI; [`super::Instance`] passes it so); every other type (Float32, Int8 … UInt64,
-//! Binary, Clock) reads as [`VarKind::Other`] and a variable with `<Dimension>` children
-//! as [`VarKind::Array`]. They load; using one (a connection, a start value) is refused
-//! where it is named.
+//! FMI 3.0 types map onto [`VarKind`]: Float64 → `Real` and Int32 → `Integer` (the ABI
+//! forms of FMI 2.0's Real and Integer), every other type to its own variant;
+//! [`ScalarVariable::type_name`] keeps the element's name for messages. An array
+//! variable (with `<Dimension>` children) keeps them in [`ScalarVariable::dimensions`];
+//! [`ModelDescription::shape`] resolves its size, from a structural parameter's start
+//! value where a dimension names one.
 
 use roxmltree::{Document, Node};
 
+use super::value::{parse_hex, Value};
 use super::FmuError;
 
 /// What an FMU says about itself.
@@ -77,11 +78,31 @@ pub struct ScalarVariable {
     pub variability: Variability,
     /// The type (`<Real>`, `<Integer>`, … in FMI 2.0; `<Float64>`, `<Int32>`, … in FMI 3.0).
     pub kind: VarKind,
-    /// `start`, as a number: Real and Integer as written, Boolean as 0 or 1, Enumeration
-    /// as its integer; `None` when absent and for String, [`VarKind::Other`] and
-    /// [`VarKind::Array`].
-    pub start: Option<f64>,
+    /// The type's element name as the description writes it (`Real`, `Integer` in FMI
+    /// 2.0; `Float64`, `Int32`, `UInt64` in FMI 3.0), for messages.
+    pub type_name: &'static str,
+    /// FMI 3.0: the `<Dimension>` children of an array variable, outermost first; empty
+    /// for a scalar (and every FMI 2.0 variable).
+    pub dimensions: Vec<Dimension>,
+    /// `start` of a scalar in its type's form (FMI 3.0 String: the first
+    /// `<Start value>`; Binary: its hex bytes); `None` when absent, for a Clock and for
+    /// an array.
+    pub start: Option<Value>,
 }
+
+/// One `<Dimension>` of an FMI 3.0 array variable.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Dimension {
+    /// `start`: a fixed size.
+    Fixed(u64),
+    /// `valueReference`: the size is the value of that (structural) parameter, read
+    /// from its start value since dsmcosim does not enter configuration mode.
+    Parameter(u32),
+}
+
+/// Largest number of elements of an array variable dsmcosim reads (the product of its
+/// dimensions): 65 536, checked before anything is allocated for it.
+pub const MAX_ARRAY_ELEMENTS: u64 = 1 << 16;
 
 /// `causality` of a variable.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -118,8 +139,10 @@ pub enum Variability {
     Continuous,
 }
 
-/// The variable's type.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// The variable's type. FMI 2.0's and FMI 3.0's types of one ABI form share a variant:
+/// Real and Float64 ([`VarKind::Real`]), Integer and Int32 ([`VarKind::Integer`]);
+/// [`ScalarVariable::type_name`] keeps the element name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum VarKind {
     /// `<Real>` (`fmi2Real`) or `<Float64>` (`fmi3Float64`): a double.
     Real,
@@ -131,49 +154,88 @@ pub enum VarKind {
     String,
     /// `<Enumeration>`: an integer at the ABI (`int` in FMI 2.0, `Int64` in FMI 3.0).
     Enumeration,
-    /// An FMI 3.0 type this importer does not exchange, by its element name (`Float32`,
-    /// `Int8`, `UInt8`, `Int16`, `UInt16`, `UInt32`, `Int64`, `UInt64`, `Binary`,
-    /// `Clock`).
-    Other(&'static str),
-    /// An FMI 3.0 array variable (it has `<Dimension>` children), by its element type's
-    /// name (`Float64`): not exchanged.
-    Array(&'static str),
+    /// `<Float32>` (FMI 3.0).
+    Float32,
+    /// `<Int8>` (FMI 3.0).
+    Int8,
+    /// `<UInt8>` (FMI 3.0).
+    UInt8,
+    /// `<Int16>` (FMI 3.0).
+    Int16,
+    /// `<UInt16>` (FMI 3.0).
+    UInt16,
+    /// `<UInt32>` (FMI 3.0).
+    UInt32,
+    /// `<Int64>` (FMI 3.0).
+    Int64,
+    /// `<UInt64>` (FMI 3.0).
+    UInt64,
+    /// `<Binary>` (FMI 3.0): bytes.
+    Binary,
+    /// `<Clock>` (FMI 3.0): not read (it needs event mode).
+    Clock,
+}
+
+impl VarKind {
+    /// The FMI 3.0 element name of the type (`Float64`, `Int32`), as the FMI 3.0
+    /// functions name it (`fmi3GetInt32`).
+    pub fn fmi3_name(self) -> &'static str {
+        match self {
+            VarKind::Real => "Float64",
+            VarKind::Integer => "Int32",
+            VarKind::Boolean => "Boolean",
+            VarKind::String => "String",
+            VarKind::Enumeration => "Enumeration",
+            VarKind::Float32 => "Float32",
+            VarKind::Int8 => "Int8",
+            VarKind::UInt8 => "UInt8",
+            VarKind::Int16 => "Int16",
+            VarKind::UInt16 => "UInt16",
+            VarKind::UInt32 => "UInt32",
+            VarKind::Int64 => "Int64",
+            VarKind::UInt64 => "UInt64",
+            VarKind::Binary => "Binary",
+            VarKind::Clock => "Clock",
+        }
+    }
+
+    /// Whether values of this type are numbers (or Booleans): what a cost, a plot and a
+    /// connection take. Not String, Binary or Clock.
+    pub fn is_numeric(self) -> bool {
+        !matches!(self, VarKind::String | VarKind::Binary | VarKind::Clock)
+    }
 }
 
 impl std::fmt::Display for VarKind {
-    /// `Real`, `Integer`, …; an unexchanged FMI 3.0 type by its name (`Float32`), an
-    /// array as `Float64 array`.
+    /// FMI 2.0's names for the types it has (`Real`, `Integer`, …), FMI 3.0's for the
+    /// others (`Float32`, `UInt64`); a variable's own element name is
+    /// [`ScalarVariable::type_name`].
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             VarKind::Real => f.write_str("Real"),
             VarKind::Integer => f.write_str("Integer"),
-            VarKind::Boolean => f.write_str("Boolean"),
-            VarKind::String => f.write_str("String"),
-            VarKind::Enumeration => f.write_str("Enumeration"),
-            VarKind::Other(name) => f.write_str(name),
-            VarKind::Array(name) => write!(f, "{name} array"),
+            other => f.write_str(other.fmi3_name()),
         }
     }
 }
 
-/// The FMI 3.0 variable elements, each with what it reads as. Names are `'static` so that
-/// [`VarKind`] stays `Copy`.
+/// The FMI 3.0 variable elements, each with what it reads as.
 const FMI3_TYPES: [(&str, VarKind); 15] = [
     ("Float64", VarKind::Real),
     ("Int32", VarKind::Integer),
     ("Boolean", VarKind::Boolean),
     ("String", VarKind::String),
     ("Enumeration", VarKind::Enumeration),
-    ("Float32", VarKind::Other("Float32")),
-    ("Int8", VarKind::Other("Int8")),
-    ("UInt8", VarKind::Other("UInt8")),
-    ("Int16", VarKind::Other("Int16")),
-    ("UInt16", VarKind::Other("UInt16")),
-    ("UInt32", VarKind::Other("UInt32")),
-    ("Int64", VarKind::Other("Int64")),
-    ("UInt64", VarKind::Other("UInt64")),
-    ("Binary", VarKind::Other("Binary")),
-    ("Clock", VarKind::Other("Clock")),
+    ("Float32", VarKind::Float32),
+    ("Int8", VarKind::Int8),
+    ("UInt8", VarKind::UInt8),
+    ("Int16", VarKind::Int16),
+    ("UInt16", VarKind::UInt16),
+    ("UInt32", VarKind::UInt32),
+    ("Int64", VarKind::Int64),
+    ("UInt64", VarKind::UInt64),
+    ("Binary", VarKind::Binary),
+    ("Clock", VarKind::Clock),
 ];
 
 impl ModelDescription {
@@ -254,6 +316,59 @@ impl ModelDescription {
         self.variables.iter().find(|v| v.name == name)
     }
 
+    /// The size of each dimension of `v` (empty for a scalar), outermost first: a
+    /// `<Dimension start>` as written, a `<Dimension valueReference>` as the start value
+    /// of the variable it names (a structural parameter, whose value dsmcosim does not
+    /// change). Refused, naming the variable, when that variable is missing or has no
+    /// whole start value, or when the element count exceeds [`MAX_ARRAY_ELEMENTS`]
+    /// (checked before anything is allocated).
+    pub fn shape(&self, v: &ScalarVariable) -> Result<Vec<usize>, FmuError> {
+        let field = format!("{} '{}'/Dimension", v.type_name, v.name);
+        let mut shape = Vec::with_capacity(v.dimensions.len());
+        let mut count: u64 = 1;
+        for d in &v.dimensions {
+            let n = match *d {
+                Dimension::Fixed(n) => n,
+                Dimension::Parameter(vr) => {
+                    let Some(p) = self.variables.iter().find(|p| p.value_reference == vr) else {
+                        return Err(bad(
+                            &field,
+                            format!("valueReference {vr} names no variable"),
+                        ));
+                    };
+                    match &p.start {
+                        Some(Value::UInt(n)) => *n,
+                        Some(Value::Int(n)) if *n >= 0 => *n as u64,
+                        _ => {
+                            return Err(bad(
+                                &field,
+                                format!(
+                                    "its size is {} '{}' (valueReference {vr}), which has no \
+                                     whole non-negative start value",
+                                    p.type_name, p.name
+                                ),
+                            ))
+                        }
+                    }
+                }
+            };
+            count = count
+                .checked_mul(n)
+                .filter(|&c| c <= MAX_ARRAY_ELEMENTS)
+                .ok_or_else(|| {
+                    bad(
+                        &field,
+                        format!(
+                            "more than MAX_ARRAY_ELEMENTS = {MAX_ARRAY_ELEMENTS} elements \
+                             (a dimension of {n})"
+                        ),
+                    )
+                })?;
+            shape.push(n as usize);
+        }
+        Ok(shape)
+    }
+
     /// Whether this is an FMI 3.0 description (`fmiVersion` `3.0` or `3.0.x`).
     pub fn is_fmi3(&self) -> bool {
         is_fmi3(&self.fmi_version)
@@ -297,12 +412,12 @@ fn variable(index: usize, n: Node) -> Result<ScalarVariable, FmuError> {
             "no <Real>, <Integer>, <Boolean>, <String> or <Enumeration> child".into(),
         )
     })?;
-    let kind = match ty.tag_name().name() {
-        "Real" => VarKind::Real,
-        "Integer" => VarKind::Integer,
-        "Boolean" => VarKind::Boolean,
-        "String" => VarKind::String,
-        "Enumeration" => VarKind::Enumeration,
+    let (kind, type_name) = match ty.tag_name().name() {
+        "Real" => (VarKind::Real, "Real"),
+        "Integer" => (VarKind::Integer, "Integer"),
+        "Boolean" => (VarKind::Boolean, "Boolean"),
+        "String" => (VarKind::String, "String"),
+        "Enumeration" => (VarKind::Enumeration, "Enumeration"),
         other => return Err(bad(&at("type"), format!("unknown type element <{other}>"))),
     };
     let field = format!("ScalarVariable '{name}'/{}@start", ty.tag_name().name());
@@ -313,6 +428,8 @@ fn variable(index: usize, n: Node) -> Result<ScalarVariable, FmuError> {
         causality,
         variability,
         kind,
+        type_name,
+        dimensions: Vec::new(),
         start,
     })
 }
@@ -336,18 +453,32 @@ fn variable3(index: usize, n: Node) -> Result<ScalarVariable, FmuError> {
         "discrete"
     };
     let variability = variability(n, &at("variability"), default)?;
-    let kind = if n.children().any(|c| c.has_tag_name("Dimension")) {
-        VarKind::Array(type_name)
+    let dimensions = n
+        .children()
+        .filter(|c| c.has_tag_name("Dimension"))
+        .map(|d| dimension(d, &at("Dimension")))
+        .collect::<Result<Vec<_>, _>>()?;
+    // A String's start values are `<Start value>` children (one per element).
+    let text = if kind == VarKind::String {
+        n.children()
+            .find(|c| c.has_tag_name("Start"))
+            .and_then(|c| c.attribute("value"))
     } else {
-        kind
+        n.attribute("start")
     };
-    let start = start(kind, n.attribute("start"), &at("start"))?;
+    let start = if dimensions.is_empty() {
+        start(kind, text, &at("start"))?
+    } else {
+        None
+    };
     Ok(ScalarVariable {
         name,
         value_reference,
         causality,
         variability,
         kind,
+        type_name,
+        dimensions,
         start,
     })
 }
@@ -379,27 +510,84 @@ fn variability(n: Node, field: &str, default: &str) -> Result<Variability, FmuEr
     })
 }
 
-/// A `start` attribute as a number for `kind` (see [`ScalarVariable::start`]).
-fn start(kind: VarKind, text: Option<&str>, field: &str) -> Result<Option<f64>, FmuError> {
-    Ok(match (kind, text) {
-        (_, None) | (VarKind::String | VarKind::Other(_) | VarKind::Array(_), _) => None,
-        (VarKind::Boolean, Some(s)) => Some(match s.trim() {
-            "true" | "1" => 1.0,
-            "false" | "0" => 0.0,
-            _ => return Err(bad(field, format!("'{s}' is not a boolean"))),
-        }),
-        (VarKind::Real, Some(s)) => Some(
-            s.trim()
-                .parse::<f64>()
+/// A `<Dimension>`: its `start` (a fixed size) or its `valueReference` (the variable
+/// holding the size), exactly one of them.
+fn dimension(d: Node, field: &str) -> Result<Dimension, FmuError> {
+    match (d.attribute("start"), d.attribute("valueReference")) {
+        (Some(s), None) => s
+            .trim()
+            .parse::<u64>()
+            .map(Dimension::Fixed)
+            .map_err(|_| bad(field, format!("start '{s}' is not a size"))),
+        (None, Some(r)) => r
+            .trim()
+            .parse::<u32>()
+            .map(Dimension::Parameter)
+            .map_err(|_| {
+                bad(
+                    field,
+                    format!("valueReference '{r}' is not a value reference"),
+                )
+            }),
+        _ => Err(bad(
+            field,
+            "needs exactly one of start and valueReference".into(),
+        )),
+    }
+}
+
+/// A scalar's `start` text in `kind`'s form (see [`ScalarVariable::start`]): integers
+/// within their type's range, Booleans `true`/`false`/`1`/`0`, Binary as hex.
+pub(crate) fn start(
+    kind: VarKind,
+    text: Option<&str>,
+    field: &str,
+) -> Result<Option<Value>, FmuError> {
+    let Some(s) = text else {
+        return Ok(None);
+    };
+    let t = s.trim();
+    let int = |lo: i64, hi: i64| -> Result<Value, FmuError> {
+        t.parse::<i64>()
+            .ok()
+            .filter(|i| (lo..=hi).contains(i))
+            .map(Value::Int)
+            .ok_or_else(|| bad(field, format!("'{s}' is not a {kind} (from {lo} to {hi})")))
+    };
+    let uint = |hi: u64| -> Result<Value, FmuError> {
+        t.parse::<u64>()
+            .ok()
+            .filter(|u| *u <= hi)
+            .map(Value::UInt)
+            .ok_or_else(|| bad(field, format!("'{s}' is not a {kind} (from 0 to {hi})")))
+    };
+    Ok(Some(match kind {
+        VarKind::Clock => return Ok(None),
+        VarKind::Real => Value::Float(
+            t.parse::<f64>()
                 .map_err(|_| bad(field, format!("'{s}' is not a number")))?,
         ),
-        (VarKind::Integer | VarKind::Enumeration, Some(s)) => Some(
-            s.trim()
-                .parse::<i32>()
-                .map_err(|_| bad(field, format!("'{s}' is not a 32-bit integer")))?
-                .into(),
+        VarKind::Float32 => Value::Float32(
+            t.parse::<f32>()
+                .map_err(|_| bad(field, format!("'{s}' is not a number")))?,
         ),
-    })
+        VarKind::Boolean => Value::Bool(match t {
+            "true" | "1" => true,
+            "false" | "0" => false,
+            _ => return Err(bad(field, format!("'{s}' is not a boolean"))),
+        }),
+        VarKind::String => Value::Text(s.to_string()),
+        VarKind::Binary => Value::Bytes(parse_hex(s).map_err(|e| bad(field, e))?),
+        VarKind::Integer => int(i32::MIN.into(), i32::MAX.into())?,
+        // FMI 2.0 passes enumerations as an int, FMI 3.0 as an Int64.
+        VarKind::Enumeration | VarKind::Int64 => int(i64::MIN, i64::MAX)?,
+        VarKind::Int8 => int(i8::MIN.into(), i8::MAX.into())?,
+        VarKind::Int16 => int(i16::MIN.into(), i16::MAX.into())?,
+        VarKind::UInt8 => uint(u8::MAX.into())?,
+        VarKind::UInt16 => uint(u16::MAX.into())?,
+        VarKind::UInt32 => uint(u32::MAX.into())?,
+        VarKind::UInt64 => uint(u64::MAX)?,
+    }))
 }
 
 /// A description error for `field`.
@@ -502,11 +690,14 @@ mod tests {
             on.map(|v| (v.causality, v.variability)),
             Some((Causality::Local, Variability::Continuous))
         );
-        assert_eq!(on.and_then(|v| v.start), Some(1.0));
-        assert_eq!(d.variable("k").and_then(|v| v.start), Some(4.0));
+        assert_eq!(on.and_then(|v| v.start.clone()), Some(Value::Bool(true)));
         assert_eq!(
-            d.variable("s").map(|v| (v.kind, v.start)),
-            Some((VarKind::String, None))
+            d.variable("k").and_then(|v| v.start.clone()),
+            Some(Value::Float(4.0))
+        );
+        assert_eq!(
+            d.variable("s").map(|v| (v.kind, v.start.clone())),
+            Some((VarKind::String, Some(Value::Text("x".into()))))
         );
     }
 

@@ -275,6 +275,10 @@ pub struct Functions {
     pub set_integer: SetValues<Integer>,
     /// `fmi2SetBoolean`.
     pub set_boolean: SetValues<Boolean>,
+    /// `fmi2GetString` and `fmi2SetString`: every FMI 2.0 FMU must export them, but an
+    /// FMU without them loads; reading or setting a String of it is then refused
+    /// naming the missing function.
+    pub string: Option<(GetValues<*const c_char>, SetValues<*const c_char>)>,
     /// `fmi2DoStep`.
     pub do_step: DoStep,
     /// `fmi2GetRealStatus` and `fmi2GetBooleanStatus`, asked after a step returned
@@ -324,6 +328,9 @@ impl Functions {
                 set_real: sym(l, fmu, "fmi2SetReal")?,
                 set_integer: sym(l, fmu, "fmi2SetInteger")?,
                 set_boolean: sym(l, fmu, "fmi2SetBoolean")?,
+                string: sym(l, fmu, "fmi2GetString")
+                    .and_then(|g| Ok((g, sym(l, fmu, "fmi2SetString")?)))
+                    .ok(),
                 do_step: sym(l, fmu, "fmi2DoStep")?,
                 status: sym(l, fmu, "fmi2GetRealStatus")
                     .and_then(|r| Ok((r, sym(l, fmu, "fmi2GetBooleanStatus")?)))

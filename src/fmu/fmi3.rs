@@ -10,7 +10,7 @@
 //! What differs from FMI 2.0 at the ABI: no callback table and no memory callbacks (the
 //! FMU allocates for itself), a log callback that is not variadic, `fmi3Boolean` is C's
 //! one-byte `bool`, every getter and setter takes the number of values as well as the
-//! number of references (they differ only for arrays, which dsmcosim does not exchange),
+//! number of references (they differ for arrays, whose elements follow each other),
 //! there is no `fmi2SetupExperiment` (start and stop go to
 //! `fmi3EnterInitializationMode`), and `fmi3DoStep` reports through out-parameters
 //! whether the FMU wants the simulation to end.
@@ -35,6 +35,10 @@ pub type Float64 = f64;
 pub type Int32 = i32;
 /// `fmi3Int64` (`int64_t`): the ABI type of enumerations.
 pub type Int64 = i64;
+/// `fmi3String` (`const char *`).
+pub type Str = *const c_char;
+/// `fmi3Binary` (`const uint8_t *`).
+pub type Binary = *const u8;
 /// `fmi3Boolean` (C99 `bool`), passed as a byte: reading it as `u8` and testing for
 /// non-zero never makes an invalid Rust `bool` from whatever the FMU wrote.
 pub type Boolean = u8;
@@ -139,6 +143,24 @@ pub type GetValues<T> =
 /// `fmi3Set*(inst, vrs, nvr, values, nValues)`.
 pub type SetValues<T> =
     unsafe extern "C" fn(Instance, *const ValueReference, usize, *const T, usize) -> Status;
+/// `fmi3GetBinary(inst, vrs, nvr, valueSizes, values, nValues)`.
+pub type GetBinary = unsafe extern "C" fn(
+    Instance,
+    *const ValueReference,
+    usize,
+    *mut usize,
+    *mut Binary,
+    usize,
+) -> Status;
+/// `fmi3SetBinary(inst, vrs, nvr, valueSizes, values, nValues)`.
+pub type SetBinary = unsafe extern "C" fn(
+    Instance,
+    *const ValueReference,
+    usize,
+    *const usize,
+    *const Binary,
+    usize,
+) -> Status;
 /// `fmi3GetFMUState(inst, &state)`.
 pub type GetState = unsafe extern "C" fn(Instance, *mut State) -> Status;
 /// `fmi3SetFMUState(inst, state)`.
@@ -202,6 +224,10 @@ pub struct Functions {
     pub set_int64: SetValues<Int64>,
     /// `fmi3SetBoolean`.
     pub set_boolean: SetValues<Boolean>,
+    /// The getters and setters of the other types, each resolved where the library
+    /// exports it (every FMI 3.0 FMU must export them all, but one that lacks one loads;
+    /// reading or setting that type is then refused naming the function).
+    pub more: MoreValues,
     /// `fmi3DoStep`.
     pub do_step: DoStep,
     /// `fmi3GetFMUState`, `fmi3SetFMUState`, `fmi3FreeFMUState` when
@@ -210,6 +236,75 @@ pub struct Functions {
     /// `fmi3SerializedFMUStateSize`, `fmi3SerializeFMUState`, `fmi3DeserializeFMUState`
     /// when `canSerializeFMUState`.
     pub serialize: Option<(StateSize, Serialize, Deserialize)>,
+}
+
+/// A getter and a setter of one FMI 3.0 type, where the library exports both.
+pub type GetSet<T> = Option<(GetValues<T>, SetValues<T>)>;
+
+/// `fmi3Get*`/`fmi3Set*` of Float32, Int8 … UInt64 (but Int32 and Int64, which every
+/// importer needs), String and Binary.
+#[derive(Clone, Copy)]
+pub struct MoreValues {
+    /// `fmi3GetFloat32`, `fmi3SetFloat32`.
+    pub float32: GetSet<f32>,
+    /// `fmi3GetInt8`, `fmi3SetInt8`.
+    pub int8: GetSet<i8>,
+    /// `fmi3GetUInt8`, `fmi3SetUInt8`.
+    pub uint8: GetSet<u8>,
+    /// `fmi3GetInt16`, `fmi3SetInt16`.
+    pub int16: GetSet<i16>,
+    /// `fmi3GetUInt16`, `fmi3SetUInt16`.
+    pub uint16: GetSet<u16>,
+    /// `fmi3GetUInt32`, `fmi3SetUInt32`.
+    pub uint32: GetSet<u32>,
+    /// `fmi3GetUInt64`, `fmi3SetUInt64`.
+    pub uint64: GetSet<u64>,
+    /// `fmi3GetString`, `fmi3SetString`.
+    pub string: GetSet<Str>,
+    /// `fmi3GetBinary`, `fmi3SetBinary`.
+    pub binary: Option<(GetBinary, SetBinary)>,
+}
+
+impl MoreValues {
+    /// Resolves each pair that `library` exports.
+    ///
+    /// # Safety
+    /// As [`Functions::load`].
+    unsafe fn load(l: &Library, fmu: &str) -> MoreValues {
+        use super::symbol as sym;
+        // SAFETY (all): FMI 3.0 fixes each symbol's type as declared.
+        unsafe {
+            MoreValues {
+                float32: sym(l, fmu, "fmi3GetFloat32")
+                    .and_then(|g| Ok((g, sym(l, fmu, "fmi3SetFloat32")?)))
+                    .ok(),
+                int8: sym(l, fmu, "fmi3GetInt8")
+                    .and_then(|g| Ok((g, sym(l, fmu, "fmi3SetInt8")?)))
+                    .ok(),
+                uint8: sym(l, fmu, "fmi3GetUInt8")
+                    .and_then(|g| Ok((g, sym(l, fmu, "fmi3SetUInt8")?)))
+                    .ok(),
+                int16: sym(l, fmu, "fmi3GetInt16")
+                    .and_then(|g| Ok((g, sym(l, fmu, "fmi3SetInt16")?)))
+                    .ok(),
+                uint16: sym(l, fmu, "fmi3GetUInt16")
+                    .and_then(|g| Ok((g, sym(l, fmu, "fmi3SetUInt16")?)))
+                    .ok(),
+                uint32: sym(l, fmu, "fmi3GetUInt32")
+                    .and_then(|g| Ok((g, sym(l, fmu, "fmi3SetUInt32")?)))
+                    .ok(),
+                uint64: sym(l, fmu, "fmi3GetUInt64")
+                    .and_then(|g| Ok((g, sym(l, fmu, "fmi3SetUInt64")?)))
+                    .ok(),
+                string: sym(l, fmu, "fmi3GetString")
+                    .and_then(|g| Ok((g, sym(l, fmu, "fmi3SetString")?)))
+                    .ok(),
+                binary: sym(l, fmu, "fmi3GetBinary")
+                    .and_then(|g| Ok((g, sym(l, fmu, "fmi3SetBinary")?)))
+                    .ok(),
+            }
+        }
+    }
 }
 
 impl Functions {
@@ -246,6 +341,7 @@ impl Functions {
                 set_int32: sym(l, fmu, "fmi3SetInt32")?,
                 set_int64: sym(l, fmu, "fmi3SetInt64")?,
                 set_boolean: sym(l, fmu, "fmi3SetBoolean")?,
+                more: MoreValues::load(l, fmu),
                 do_step: sym(l, fmu, "fmi3DoStep")?,
                 state: if state {
                     Some((

@@ -28,6 +28,7 @@ use super::description::VarKind;
 use super::fmi2::{self, CallbackFunctions, Component, LogTarget, Status};
 use super::fmi3;
 use super::loaded::{Api, Loaded};
+use super::value::{Value, MAX_VALUE_BYTES};
 use super::FmuError;
 
 /// Largest serialized state accepted from an FMU [bytes]: 1 GiB, so a corrupt size
@@ -764,6 +765,460 @@ impl Instance {
         Ok(())
     }
 
+    /// Reads variables of one type, `kind`: the `refs` in order, `n_values` values in all
+    /// (more than `refs.len()` where a reference is an FMI 3.0 array, whose elements
+    /// follow each other in row-major order), appended to `out` in [`Value`]'s form of
+    /// the type. FMI 2.0: `fmi2GetReal`, `fmi2GetInteger` (Integer, Enumeration),
+    /// `fmi2GetBoolean`, `fmi2GetString`; FMI 3.0: `fmi3Get<Type>` (Enumeration through
+    /// `fmi3GetInt64`). Strings and Binary values are copied at once (the FMU's pointers
+    /// are valid only until its next call), each at most [`MAX_VALUE_BYTES`].
+    pub fn get_values(
+        &self,
+        kind: VarKind,
+        refs: &[u32],
+        n_values: usize,
+        out: &mut Vec<Value>,
+    ) -> Result<(), FmuError> {
+        if refs.is_empty() && n_values == 0 {
+            return Ok(());
+        }
+        match self.core.shared.api {
+            Api::Fmi2(f) => {
+                if n_values != refs.len() {
+                    let function = self.pick("fmi2GetReal", "");
+                    return Err(self.length(function, refs.len(), n_values));
+                }
+                match kind {
+                    VarKind::Real => {
+                        let v = self.get2("fmi2GetReal", f.get_real, refs)?;
+                        out.extend(v.into_iter().map(Value::Float));
+                    }
+                    VarKind::Integer | VarKind::Enumeration => {
+                        let v = self.get2("fmi2GetInteger", f.get_integer, refs)?;
+                        out.extend(v.into_iter().map(|i| Value::Int(i.into())));
+                    }
+                    VarKind::Boolean => {
+                        let v = self.get2("fmi2GetBoolean", f.get_boolean, refs)?;
+                        out.extend(v.into_iter().map(|b| Value::Bool(b != 0)));
+                    }
+                    VarKind::String => {
+                        let (get, _) = f.string.ok_or_else(|| self.no_symbol("fmi2GetString"))?;
+                        let v = self.get2("fmi2GetString", get, refs)?;
+                        for (&p, &vr) in v.iter().zip(refs) {
+                            out.push(Value::Text(self.text_value("fmi2GetString", vr, p)?));
+                        }
+                    }
+                    other => return Err(self.not_fmi2(other, refs)),
+                }
+            }
+            Api::Fmi3(f) => {
+                let m = f.more;
+                macro_rules! get {
+                    ($name:literal, $fn:expr, $wrap:expr) => {{
+                        let v = self.get3($name, $fn, refs, n_values)?;
+                        out.extend(v.into_iter().map($wrap));
+                    }};
+                }
+                match kind {
+                    VarKind::Real => get!("fmi3GetFloat64", Some(f.get_float64), Value::Float),
+                    VarKind::Float32 => {
+                        get!("fmi3GetFloat32", m.float32.map(|p| p.0), Value::Float32)
+                    }
+                    VarKind::Integer => {
+                        get!("fmi3GetInt32", Some(f.get_int32), |x| Value::Int(x.into()))
+                    }
+                    VarKind::Int64 | VarKind::Enumeration => {
+                        get!("fmi3GetInt64", Some(f.get_int64), Value::Int)
+                    }
+                    VarKind::Int8 => {
+                        get!("fmi3GetInt8", m.int8.map(|p| p.0), |x| Value::Int(x.into()))
+                    }
+                    VarKind::Int16 => {
+                        get!("fmi3GetInt16", m.int16.map(|p| p.0), |x| Value::Int(
+                            x.into()
+                        ))
+                    }
+                    VarKind::UInt8 => {
+                        get!("fmi3GetUInt8", m.uint8.map(|p| p.0), |x| Value::UInt(
+                            x.into()
+                        ))
+                    }
+                    VarKind::UInt16 => {
+                        get!("fmi3GetUInt16", m.uint16.map(|p| p.0), |x| Value::UInt(
+                            x.into()
+                        ))
+                    }
+                    VarKind::UInt32 => {
+                        get!("fmi3GetUInt32", m.uint32.map(|p| p.0), |x| Value::UInt(
+                            x.into()
+                        ))
+                    }
+                    VarKind::UInt64 => get!("fmi3GetUInt64", m.uint64.map(|p| p.0), Value::UInt),
+                    VarKind::Boolean => {
+                        get!("fmi3GetBoolean", Some(f.get_boolean), |b| Value::Bool(
+                            b != 0
+                        ))
+                    }
+                    VarKind::String => {
+                        let v =
+                            self.get3("fmi3GetString", m.string.map(|p| p.0), refs, n_values)?;
+                        let vr = |i: usize| refs.get(i).or(refs.last()).copied().unwrap_or(0);
+                        for (i, &p) in v.iter().enumerate() {
+                            out.push(Value::Text(self.text_value("fmi3GetString", vr(i), p)?));
+                        }
+                    }
+                    VarKind::Binary => {
+                        let (get, _) = m.binary.ok_or_else(|| self.no_symbol("fmi3GetBinary"))?;
+                        let mut sizes = vec![0usize; n_values];
+                        let mut ptrs: Vec<fmi3::Binary> = vec![std::ptr::null(); n_values];
+                        // The bytes are copied under the lock, before the FMU is called
+                        // again.
+                        let inner = self.core.call("fmi3GetBinary", None, |c| {
+                            // SAFETY: `sizes` and `ptrs` hold `n_values` elements each.
+                            unsafe {
+                                get(
+                                    c,
+                                    refs.as_ptr(),
+                                    refs.len(),
+                                    sizes.as_mut_ptr(),
+                                    ptrs.as_mut_ptr(),
+                                    n_values,
+                                )
+                            }
+                        })?;
+                        let vr = |i: usize| refs.get(i).or(refs.last()).copied().unwrap_or(0);
+                        for (i, (&size, &p)) in sizes.iter().zip(&ptrs).enumerate() {
+                            if size > MAX_VALUE_BYTES {
+                                return Err(self.too_long("fmi3GetBinary", vr(i), size));
+                            }
+                            if size == 0 {
+                                out.push(Value::Bytes(Vec::new()));
+                                continue;
+                            }
+                            if p.is_null() {
+                                return Err(self.bad_value(
+                                    "fmi3GetBinary",
+                                    vr(i),
+                                    format!("a null pointer for {size} bytes"),
+                                ));
+                            }
+                            // SAFETY: the FMU gave `size` bytes at `p`, valid until its
+                            // next call, which the held lock keeps from happening.
+                            let bytes = unsafe { std::slice::from_raw_parts(p, size) };
+                            out.push(Value::Bytes(bytes.to_vec()));
+                        }
+                        drop(inner);
+                    }
+                    VarKind::Clock => {
+                        return Err(self.bad_value(
+                            "fmi3GetClock",
+                            refs[0],
+                            "a Clock is not read: it needs event mode".into(),
+                        ))
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Sets scalar variables of one type, `kind`: `values[i]` (in [`Value`]'s form of
+    /// the type) to `refs[i]`, with the functions [`Instance::get_values`] names. A
+    /// value of another form or outside the type's range is [`FmuError::BadValue`].
+    pub fn set_values(
+        &mut self,
+        kind: VarKind,
+        refs: &[u32],
+        values: &[Value],
+    ) -> Result<(), FmuError> {
+        let function = self.set_name(kind);
+        self.same_len(function, refs.len(), values.len())?;
+        if refs.is_empty() {
+            return Ok(());
+        }
+        match self.core.shared.api {
+            Api::Fmi2(f) => match kind {
+                VarKind::Real => {
+                    let v = self.convert(function, refs, values, float)?;
+                    self.set_real(refs, &v)
+                }
+                VarKind::Integer | VarKind::Enumeration => {
+                    let v = self.convert(function, refs, values, int::<i32>)?;
+                    self.core
+                        .call(function, None, |c| {
+                            // SAFETY: both slices hold `refs.len()` elements.
+                            unsafe { (f.set_integer)(c, refs.as_ptr(), refs.len(), v.as_ptr()) }
+                        })
+                        .map(drop)
+                }
+                VarKind::Boolean => {
+                    let v = self.convert(function, refs, values, boolean)?;
+                    self.set_boolean(refs, &v)
+                }
+                VarKind::String => {
+                    let (_, set) = f.string.ok_or_else(|| self.no_symbol(function))?;
+                    let texts = self.c_strings(function, refs, values)?;
+                    let ptrs: Vec<*const c_char> = texts.iter().map(|t| t.as_ptr()).collect();
+                    self.core
+                        .call(function, None, |c| {
+                            // SAFETY: both slices hold `refs.len()` elements; the strings
+                            // live past the call.
+                            unsafe { set(c, refs.as_ptr(), refs.len(), ptrs.as_ptr()) }
+                        })
+                        .map(drop)
+                }
+                other => Err(self.not_fmi2(other, refs)),
+            },
+            Api::Fmi3(f) => {
+                let m = f.more;
+                macro_rules! set {
+                    ($fn:expr, $conv:expr) => {{
+                        let v = self.convert(function, refs, values, $conv)?;
+                        self.set3(function, $fn, refs, &v)
+                    }};
+                }
+                match kind {
+                    VarKind::Real => set!(Some(f.set_float64), float),
+                    VarKind::Float32 => set!(m.float32.map(|p| p.1), |v: &Value| match *v {
+                        Value::Float32(x) => Some(x),
+                        _ => None,
+                    }),
+                    VarKind::Integer => set!(Some(f.set_int32), int::<i32>),
+                    VarKind::Int64 | VarKind::Enumeration => set!(Some(f.set_int64), int::<i64>),
+                    VarKind::Int8 => set!(m.int8.map(|p| p.1), int::<i8>),
+                    VarKind::Int16 => set!(m.int16.map(|p| p.1), int::<i16>),
+                    VarKind::UInt8 => set!(m.uint8.map(|p| p.1), uint::<u8>),
+                    VarKind::UInt16 => set!(m.uint16.map(|p| p.1), uint::<u16>),
+                    VarKind::UInt32 => set!(m.uint32.map(|p| p.1), uint::<u32>),
+                    VarKind::UInt64 => set!(m.uint64.map(|p| p.1), uint::<u64>),
+                    VarKind::Boolean => set!(Some(f.set_boolean), |v: &Value| {
+                        boolean(v).map(u8::from)
+                    }),
+                    VarKind::String => {
+                        let texts = self.c_strings(function, refs, values)?;
+                        let ptrs: Vec<fmi3::Str> = texts.iter().map(|t| t.as_ptr()).collect();
+                        self.set3(function, m.string.map(|p| p.1), refs, &ptrs)
+                    }
+                    VarKind::Binary => {
+                        let (_, set) = m.binary.ok_or_else(|| self.no_symbol(function))?;
+                        let bytes = self.convert(function, refs, values, |v: &Value| match v {
+                            Value::Bytes(b) => Some(b.as_slice()),
+                            _ => None,
+                        })?;
+                        let sizes: Vec<usize> = bytes.iter().map(|b| b.len()).collect();
+                        let ptrs: Vec<fmi3::Binary> = bytes.iter().map(|b| b.as_ptr()).collect();
+                        let n = refs.len();
+                        self.core
+                            .call(function, None, |c| {
+                                // SAFETY: all slices hold `n` elements; the bytes live
+                                // past the call.
+                                unsafe {
+                                    set(c, refs.as_ptr(), n, sizes.as_ptr(), ptrs.as_ptr(), n)
+                                }
+                            })
+                            .map(drop)
+                    }
+                    VarKind::Clock => Err(self.bad_value(
+                        function,
+                        refs[0],
+                        "a Clock is not set: it needs event mode".into(),
+                    )),
+                }
+            }
+        }
+    }
+
+    /// The setter [`Instance::set_values`] calls for `kind` in this FMU's version.
+    fn set_name(&self, kind: VarKind) -> &'static str {
+        if !self.core.fmi3() {
+            return match kind {
+                VarKind::Real => "fmi2SetReal",
+                VarKind::Integer | VarKind::Enumeration => "fmi2SetInteger",
+                VarKind::Boolean => "fmi2SetBoolean",
+                _ => "fmi2SetString",
+            };
+        }
+        match kind {
+            VarKind::Real => "fmi3SetFloat64",
+            VarKind::Float32 => "fmi3SetFloat32",
+            VarKind::Integer => "fmi3SetInt32",
+            VarKind::Int64 | VarKind::Enumeration => "fmi3SetInt64",
+            VarKind::Int8 => "fmi3SetInt8",
+            VarKind::Int16 => "fmi3SetInt16",
+            VarKind::UInt8 => "fmi3SetUInt8",
+            VarKind::UInt16 => "fmi3SetUInt16",
+            VarKind::UInt32 => "fmi3SetUInt32",
+            VarKind::UInt64 => "fmi3SetUInt64",
+            VarKind::Boolean => "fmi3SetBoolean",
+            VarKind::String => "fmi3SetString",
+            VarKind::Binary => "fmi3SetBinary",
+            VarKind::Clock => "fmi3SetClock",
+        }
+    }
+
+    /// An FMI 2.0 getter's values (`n` = `refs.len()`).
+    fn get2<T: Copy + Default>(
+        &self,
+        function: &'static str,
+        f: fmi2::GetValues<T>,
+        refs: &[u32],
+    ) -> Result<Vec<T>, FmuError> {
+        let mut v = vec![T::default(); refs.len()];
+        drop(self.core.call(function, None, |c| {
+            // SAFETY: both slices hold `refs.len()` elements.
+            unsafe { f(c, refs.as_ptr(), refs.len(), v.as_mut_ptr()) }
+        })?);
+        Ok(v)
+    }
+
+    /// An FMI 3.0 getter's `n_values` values, or the missing function's error.
+    fn get3<T: Copy + Default>(
+        &self,
+        function: &'static str,
+        f: Option<fmi3::GetValues<T>>,
+        refs: &[u32],
+        n_values: usize,
+    ) -> Result<Vec<T>, FmuError> {
+        let f = f.ok_or_else(|| self.no_symbol(function))?;
+        let mut v = vec![T::default(); n_values];
+        drop(self.core.call(function, None, |c| {
+            // SAFETY: `v` holds `n_values` elements, as passed.
+            unsafe { f(c, refs.as_ptr(), refs.len(), v.as_mut_ptr(), n_values) }
+        })?);
+        Ok(v)
+    }
+
+    /// An FMI 3.0 setter on scalars, or the missing function's error.
+    fn set3<T>(
+        &self,
+        function: &'static str,
+        f: Option<fmi3::SetValues<T>>,
+        refs: &[u32],
+        values: &[T],
+    ) -> Result<(), FmuError> {
+        let f = f.ok_or_else(|| self.no_symbol(function))?;
+        let n = refs.len();
+        self.core
+            .call(function, None, |c| {
+                // SAFETY: both slices hold `n` elements (checked by the caller).
+                unsafe { f(c, refs.as_ptr(), n, values.as_ptr(), n) }
+            })
+            .map(drop)
+    }
+
+    /// Each value in the setter's C form by `conv`, or [`FmuError::BadValue`] naming the
+    /// first that has none.
+    fn convert<'v, T>(
+        &self,
+        function: &'static str,
+        refs: &[u32],
+        values: &'v [Value],
+        conv: impl Fn(&'v Value) -> Option<T>,
+    ) -> Result<Vec<T>, FmuError> {
+        values
+            .iter()
+            .zip(refs)
+            .map(|(v, &vr)| {
+                conv(v).ok_or_else(|| {
+                    self.bad_value(function, vr, format!("{v:?} is not a value of its type"))
+                })
+            })
+            .collect()
+    }
+
+    /// Strings as C strings for a setter.
+    fn c_strings(
+        &self,
+        function: &'static str,
+        refs: &[u32],
+        values: &[Value],
+    ) -> Result<Vec<CString>, FmuError> {
+        let texts = self.convert(function, refs, values, |v: &Value| match v {
+            Value::Text(s) => Some(s.as_str()),
+            _ => None,
+        })?;
+        texts
+            .into_iter()
+            .map(|t| {
+                CString::new(t).map_err(|_| FmuError::NulByte {
+                    what: "String value",
+                    value: t.replace('\0', "\\0"),
+                })
+            })
+            .collect()
+    }
+
+    /// The text of a String an FMU gave: NUL-terminated within [`MAX_VALUE_BYTES`], not
+    /// null.
+    fn text_value(
+        &self,
+        function: &'static str,
+        vr: u32,
+        p: *const c_char,
+    ) -> Result<String, FmuError> {
+        if p.is_null() {
+            return Err(self.bad_value(function, vr, "a null pointer for a String".into()));
+        }
+        let mut len = 0;
+        // SAFETY: the FMU gave a NUL-terminated string; it is read up to its NUL, and no
+        // further than MAX_VALUE_BYTES.
+        while unsafe { *p.add(len) } != 0 {
+            len += 1;
+            if len > MAX_VALUE_BYTES {
+                return Err(self.too_long(function, vr, len));
+            }
+        }
+        // SAFETY: `len` bytes before the NUL, read above.
+        let bytes = unsafe { std::slice::from_raw_parts(p.cast::<u8>(), len) };
+        Ok(String::from_utf8_lossy(bytes).into_owned())
+    }
+
+    fn too_long(&self, function: &'static str, vr: u32, len: usize) -> FmuError {
+        FmuError::CapExceeded {
+            what: format!(
+                "MAX_VALUE_BYTES (a value FMU '{}' gave through {function} for value \
+                 reference {vr})",
+                self.fmu_name()
+            ),
+            value: len as u64,
+            limit: MAX_VALUE_BYTES as u64,
+        }
+    }
+
+    fn bad_value(&self, function: &'static str, value_reference: u32, message: String) -> FmuError {
+        FmuError::BadValue {
+            fmu: self.core.shared.name.clone(),
+            function,
+            value_reference,
+            message,
+        }
+    }
+
+    fn no_symbol(&self, symbol: &'static str) -> FmuError {
+        FmuError::MissingSymbol {
+            fmu: self.core.shared.name.clone(),
+            symbol,
+        }
+    }
+
+    fn length(&self, function: &'static str, refs: usize, values: usize) -> FmuError {
+        FmuError::LengthMismatch {
+            fmu: self.core.shared.name.clone(),
+            function,
+            refs,
+            values,
+        }
+    }
+
+    /// An FMI 3.0 type asked of an FMI 2.0 FMU (its description cannot declare one).
+    fn not_fmi2(&self, kind: VarKind, refs: &[u32]) -> FmuError {
+        self.bad_value(
+            "fmi2Get/Set",
+            refs.first().copied().unwrap_or(0),
+            format!("FMI 2.0 has no type {kind}"),
+        )
+    }
+
     /// `fmi2GetFMUstate` or `fmi3GetFMUState`: a copy of the instance's state. Refused
     /// without calling the FMU unless it declares `canGetAndSetFMUstate`
     /// (`canGetAndSetFMUState` in FMI 3.0).
@@ -966,6 +1421,38 @@ impl Instance {
             state,
             core: Arc::clone(&self.core),
         })
+    }
+}
+
+/// A Real's value for a setter.
+fn float(v: &Value) -> Option<f64> {
+    match *v {
+        Value::Float(x) => Some(x),
+        _ => None,
+    }
+}
+
+/// A signed integer's value as `T`, if in its range.
+fn int<T: TryFrom<i64>>(v: &Value) -> Option<T> {
+    match *v {
+        Value::Int(i) => T::try_from(i).ok(),
+        _ => None,
+    }
+}
+
+/// An unsigned integer's value as `T`, if in its range.
+fn uint<T: TryFrom<u64>>(v: &Value) -> Option<T> {
+    match *v {
+        Value::UInt(u) => T::try_from(u).ok(),
+        _ => None,
+    }
+}
+
+/// A Boolean's value.
+fn boolean(v: &Value) -> Option<bool> {
+    match *v {
+        Value::Bool(b) => Some(b),
+        _ => None,
     }
 }
 

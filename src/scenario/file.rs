@@ -201,10 +201,13 @@ pub struct FmuFile {
         skip_serializing_if = "Option::is_none"
     )]
     pub step: Option<f64>,
-    /// Start values of parameters and inputs, by variable name (Real, Integer or
-    /// Boolean variables; a Boolean is 0 or 1); default none (the FMU's own starts).
+    /// Start values of parameters and inputs, by variable name, of any type: a number
+    /// for Real/Float64, Float32 and the integer types (an Int64 or a UInt64 as a whole
+    /// JSON number, read without loss), `true`/`false` or 0/1 for a Boolean, a string for
+    /// a String, a string of hex digits for a Binary; default none (the FMU's own
+    /// starts).
     #[serde(default)]
-    pub start: std::collections::BTreeMap<String, f64>,
+    pub start: std::collections::BTreeMap<String, StartValue>,
     /// Outputs recorded in trace.csv (and the digest); default every Real output.
     #[serde(
         default,
@@ -216,6 +219,19 @@ pub struct FmuFile {
     /// are still printed (and kept in summary.json); default `false`.
     #[serde(default)]
     pub logging: bool,
+}
+
+/// A value of `fmus[i].start`: a JSON number (kept as written, so a 64-bit integer is
+/// exact), a Boolean or a string.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(untagged)]
+pub enum StartValue {
+    /// `true` or `false`.
+    Bool(bool),
+    /// A number.
+    Number(serde_json::Number),
+    /// A string (a String's text, a Binary's hex bytes).
+    Text(String),
 }
 
 fn default_fmu_node() -> usize {

@@ -799,16 +799,17 @@ impl Scenario {
                 .is_some_and(|p| p.coupling.predicts() && p.ghosts == GhostMode::Integrate)
     }
 
-    /// The traced FMU outputs' names, `unit.variable`, FMU by FMU in scenario order: the
-    /// trace's signal columns and every value list that follows them.
+    /// The traced FMU outputs' names, `unit.variable` (an array's elements
+    /// `unit.variable[i]`), FMU by FMU in scenario order: the trace's signal columns and
+    /// every value list that follows them.
     pub fn signal_names(&self) -> Vec<String> {
         self.fmus
             .iter()
             .flat_map(|f| {
-                f.outputs
-                    .iter()
-                    .filter(|v| v.traced)
-                    .map(move |v| format!("{}.{}", f.name, v.name))
+                f.outputs.iter().filter(|v| v.traced).flat_map(move |v| {
+                    let names = v.element_names().into_iter();
+                    names.map(move |n| format!("{}.{n}", f.name))
+                })
             })
             .collect()
     }
@@ -919,10 +920,55 @@ pub struct FmuVar {
     pub name: String,
     /// Value reference.
     pub vr: u32,
+    /// Its FMI type.
+    pub kind: crate::fmu::VarKind,
     /// Output recorded in trace.csv (outputs only).
     pub traced: bool,
     /// Value before the first delivery (inputs: the start value; outputs: unused).
-    pub start: f64,
+    pub start: crate::fmu::Value,
+    /// An FMI 3.0 array's size per dimension (outermost first); empty for a scalar.
+    #[serde(default)]
+    pub shape: Vec<usize>,
+}
+
+impl FmuVar {
+    /// How many values it has: 1 for a scalar, an array's element count.
+    pub fn len(&self) -> usize {
+        if self.shape.is_empty() {
+            1
+        } else {
+            self.shape.iter().product()
+        }
+    }
+
+    /// Whether it is an array of no elements.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The names of its values: `name` for a scalar; for an array, row-major,
+    /// `name[1]` … `name[n]` (one dimension) or `name[1,1]`, `name[1,2]` … (several),
+    /// 1-based as FMI 3.0 numbers elements in its descriptions.
+    pub fn element_names(&self) -> Vec<String> {
+        if self.shape.is_empty() {
+            return vec![self.name.clone()];
+        }
+        let mut index = vec![0usize; self.shape.len()];
+        (0..self.len())
+            .map(|_| {
+                let parts: Vec<String> = index.iter().map(|i| (i + 1).to_string()).collect();
+                let name = format!("{}[{}]", self.name, parts.join(","));
+                for (d, i) in index.iter_mut().enumerate().rev() {
+                    *i += 1;
+                    if *i < self.shape[d] {
+                        break;
+                    }
+                    *i = 0;
+                }
+                name
+            })
+            .collect()
+    }
 }
 
 /// A start value of `fmus[i].start`.
@@ -933,20 +979,9 @@ pub struct FmuStart {
     /// Value reference.
     pub vr: u32,
     /// Type at the FMI interface.
-    pub kind: FmuValueKind,
-    /// Value (an Integer's or Boolean's as a whole number).
-    pub value: f64,
-}
-
-/// The FMI types a start value can have.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub enum FmuValueKind {
-    /// `fmi2Real`.
-    Real,
-    /// `fmi2Integer`.
-    Integer,
-    /// `fmi2Boolean`.
-    Boolean,
+    pub kind: crate::fmu::VarKind,
+    /// Value, in the type's form.
+    pub value: crate::fmu::Value,
 }
 
 /// A validated connection: a source's value carried by a channel to a sink.

@@ -10,8 +10,11 @@
 //! 1. **Step** — for every step k = 0..=steps: the time `t_k` as a little-endian `u64`
 //!    count of nanoseconds, then the `f64` bit patterns (little-endian) of every link's
 //!    `w` then every link's `f` (link order), then every body's `p` then `v` (body
-//!    order, x y z). These are trace.csv's values, for every step, whatever the
-//!    decimation.
+//!    order, x y z), then every traced FMU output value in its type's bytes (a Real's
+//!    `f64` bits, an integer as a little-endian `i64` or `u64`, a Boolean as a `u64` 0
+//!    or 1, a String's or a Binary's length as a `u64` then its bytes: see
+//!    [`crate::fmu::value`]). These are trace.csv's values, for every step, whatever
+//!    the decimation.
 //! 2. **TDMA cycle** — on a TDMA scene, each cycle when it is computed (at its start):
 //!    the cycle's start [ns], then per frame in slot order its slot, sender, actual start
 //!    [ns] and delivery [ns] (`u64::MAX` if lost), each a little-endian `u64` — so the
@@ -71,6 +74,15 @@ impl Digest {
     pub fn values(&mut self, values: &[f64]) {
         for v in values {
             self.record.extend_from_slice(&v.to_bits().to_le_bytes());
+        }
+    }
+
+    /// Adds FMU output values to the current record, each as
+    /// [`crate::fmu::Value::digest_bytes`] gives it (a Real's `f64` bits, as
+    /// [`Digest::values`] adds them).
+    pub fn signals(&mut self, values: &[crate::fmu::Value]) {
+        for v in values {
+            v.digest_bytes(&mut self.record);
         }
     }
 

@@ -263,7 +263,7 @@ impl Recorder {
         for v in s.v {
             d.values(v.as_slice());
         }
-        d.values(s.signals);
+        d.signals(s.signals);
         d.end_step();
         for (peak, w) in self.link_peaks.iter_mut().zip(s.w) {
             *peak = peak.max(w.abs());
@@ -291,8 +291,10 @@ impl Recorder {
         self.rows += 1;
         let t = s.time.as_secs_f64();
         if !s.signals.is_empty() {
-            self.signal_plots
-                .push(t, std::iter::empty(), s.signals.iter().copied());
+            // Numbers and Booleans are plotted; a String or Binary column has no curve
+            // (NaN, which signals.svg leaves out).
+            let numbers = s.signals.iter().map(|v| v.as_f64().unwrap_or(f64::NAN));
+            self.signal_plots.push(t, std::iter::empty(), numbers);
         }
         let omega = |i: usize, ax: usize| s.omega.get(i).map_or(0.0, |w| w[ax]);
         let spins = self
@@ -382,7 +384,10 @@ impl Recorder {
             }
         }
         for x in s.signals {
-            let _ = write!(line, ",{x}");
+            // An FMU output of any type: a String CSV-quoted where needed
+            // ([`crate::fmu::Value::write_csv`]).
+            line.push(',');
+            x.write_csv(line);
             out(line, SPILL)?;
         }
         line.push('\n');
@@ -545,6 +550,8 @@ impl Recorder {
         self.signal_names
             .iter()
             .zip(&p.firsts)
+            // A String or Binary column (all NaN here) has no curve.
+            .filter(|(_, s)| s.iter().any(|v| !v.is_nan()))
             .map(|(name, s)| Series::new(name.clone(), zip(&p.times, s)))
             .collect()
     }

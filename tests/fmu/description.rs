@@ -1,7 +1,7 @@
 //! modelDescription.xml: missing fields are named, an unknown FMI version is refused,
 //! variables found (FMI 3.0 descriptions: `fmi3.rs`).
 
-use dsmcosim::fmu::{Causality, FmuError, ModelDescription, VarKind, Variability};
+use dsmcosim::fmu::{Causality, FmuError, ModelDescription, Value, VarKind, Variability};
 
 use crate::fmu_build::fmus_dir;
 
@@ -57,24 +57,28 @@ fn variables_are_found_by_name_with_their_attributes() {
             k.causality,
             k.variability,
             k.kind,
-            k.start
+            k.start.clone()
         ),
         (
             1,
             Causality::Parameter,
             Variability::Fixed,
             VarKind::Real,
-            Some(4.0)
+            Some(Value::Float(4.0))
         )
     );
     let f = d.variable("F").expect("F");
     assert_eq!(
-        (f.causality, f.variability, f.start),
-        (Causality::Input, Variability::Continuous, Some(0.0))
+        (f.causality, f.variability, f.start.clone()),
+        (
+            Causality::Input,
+            Variability::Continuous,
+            Some(Value::Float(0.0))
+        )
     );
     let a = d.variable("a").expect("a");
     assert_eq!(
-        (a.value_reference, a.causality, a.start),
+        (a.value_reference, a.causality, a.start.clone()),
         (8, Causality::Output, None)
     );
     assert!(d.variable("K").is_none(), "names are case-sensitive");

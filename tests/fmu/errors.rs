@@ -130,7 +130,7 @@ fn each_mistake_is_named_by_its_field_its_fmu_and_its_variable() {
                 json!({"crash": 0.5}),
             ),
             "fmus[0].start.crash:",
-            "is an Integer (got 0.5)",
+            "\"crash\" is Integer: a whole number from -2147483648 to 2147483647 (got 0.5)",
         ),
         (
             set(
@@ -139,12 +139,12 @@ fn each_mistake_is_named_by_its_field_its_fmu_and_its_variable() {
                 json!("plant.crash"),
             ),
             "connections[0].from:",
-            "connections carry Real variables",
+            "variable \"crash\" has causality Parameter; a connection reads an Output",
         ),
         (
             set(base(), "/fmus/0/trace", json!(["F"])),
             "fmus[0].trace[0]:",
-            "is not a Real output",
+            "\"F\" is not an output (causality Input, type Real)",
         ),
         (
             set(base(), "/measurement", json!({"signals": ["plant.q"]})),

@@ -4,7 +4,9 @@
 
 use std::path::{Path, PathBuf};
 
-use dsmcosim::fmu::{Causality, Fmu, FmuError, ModelDescription, StepEnd, VarKind, Variability};
+use dsmcosim::fmu::{
+    Causality, Dimension, Fmu, FmuError, ModelDescription, StepEnd, Value, VarKind, Variability,
+};
 use serde_json::json;
 
 use crate::closed_form;
@@ -112,24 +114,25 @@ fn an_fmi3_description_parses_with_its_token_capabilities_and_variables() {
             k.causality,
             k.variability,
             k.kind,
-            k.start
+            k.start.clone()
         ),
         (
             1,
             Causality::Parameter,
             Variability::Fixed,
             VarKind::Real,
-            Some(4.0)
+            Some(Value::Float(4.0))
         )
     );
     let a = d.variable("a").expect("a");
     assert_eq!(
-        (a.value_reference, a.causality, a.start),
+        (a.value_reference, a.causality, a.start.clone()),
         (8, Causality::Output, None)
     );
 
-    // The other FMI 3.0 types load as `Other`, arrays as `Array`; FMI 3.0's defaults
-    // (variability discrete except for floats) and its extra causality are read.
+    // Every FMI 3.0 type loads as its own kind, keeping its element name, an array with
+    // its dimensions; FMI 3.0's defaults (variability discrete except for floats) and its
+    // extra causality are read, start values in their types' forms.
     let extra = r#"
     <Float32 name="f32" valueReference="20" causality="output"/>
     <Int8 name="i8" valueReference="21" causality="parameter" variability="fixed" start="3"/>
@@ -144,25 +147,49 @@ fn an_fmi3_description_parses_with_its_token_capabilities_and_variables() {
     let xml = msd3_xml().replace("  </ModelVariables>", extra);
     let d = ModelDescription::parse(&xml).expect("the extended description parses");
     let kind = |n: &str| d.variable(n).map(|v| v.kind);
-    assert_eq!(kind("f32"), Some(VarKind::Other("Float32")));
-    assert_eq!(kind("i8"), Some(VarKind::Other("Int8")));
-    assert_eq!(kind("u64"), Some(VarKind::Other("UInt64")));
-    assert_eq!(kind("bin"), Some(VarKind::Other("Binary")));
-    assert_eq!(kind("tick"), Some(VarKind::Other("Clock")));
-    assert_eq!(kind("arr"), Some(VarKind::Array("Float64")));
-    assert_eq!(VarKind::Array("Float64").to_string(), "Float64 array");
+    assert_eq!(kind("f32"), Some(VarKind::Float32));
+    assert_eq!(kind("i8"), Some(VarKind::Int8));
+    assert_eq!(kind("u64"), Some(VarKind::UInt64));
+    assert_eq!(kind("bin"), Some(VarKind::Binary));
+    assert_eq!(kind("tick"), Some(VarKind::Clock));
+    assert_eq!(kind("arr"), Some(VarKind::Real));
+    let type_name = |n: &str| d.variable(n).map(|v| v.type_name);
+    assert_eq!(
+        type_name("n"),
+        Some("Int32"),
+        "FMI 3.0's Int32 is not called Integer"
+    );
+    assert_eq!(type_name("arr"), Some("Float64"));
+    let arr = d.variable("arr").expect("arr");
+    assert_eq!(arr.dimensions, vec![Dimension::Fixed(3)]);
+    assert_eq!(d.shape(arr).ok(), Some(vec![3]));
+    assert_eq!(
+        d.variable("i8").and_then(|v| v.start.clone()),
+        Some(Value::Int(3))
+    );
     let n = d.variable("n").expect("n");
     assert_eq!(
-        (n.causality, n.kind, n.start),
-        (Causality::StructuralParameter, VarKind::Integer, Some(7.0))
+        (n.causality, n.kind, n.start.clone()),
+        (
+            Causality::StructuralParameter,
+            VarKind::Integer,
+            Some(Value::Int(7))
+        )
     );
     let on = d.variable("on").expect("on");
     assert_eq!(
-        (on.kind, on.variability, on.start),
-        (VarKind::Boolean, Variability::Discrete, Some(1.0))
+        (on.kind, on.variability, on.start.clone()),
+        (
+            VarKind::Boolean,
+            Variability::Discrete,
+            Some(Value::Bool(true))
+        )
     );
     let mode = d.variable("mode").expect("mode");
-    assert_eq!((mode.kind, mode.start), (VarKind::Enumeration, Some(2.0)));
+    assert_eq!(
+        (mode.kind, mode.start.clone()),
+        (VarKind::Enumeration, Some(Value::Int(2)))
+    );
     assert_eq!(
         d.variable("f32").map(|v| v.variability),
         Some(Variability::Continuous)
@@ -443,7 +470,7 @@ fn an_fmi3_plant_and_an_fmi2_controller_loop_as_the_fmi2_pair_does() {
 }
 
 #[test]
-fn fmi3_variables_the_importer_does_not_exchange_load_but_are_refused_when_named() {
+fn fmi3_variables_of_other_types_are_refused_where_their_type_does_not_fit() {
     let dir = scratch("fmu-fmi3", "other-types");
     build_test_fmu("pd", &dir).expect("pd.fmu");
     let extra = r#"
@@ -454,7 +481,8 @@ fn fmi3_variables_the_importer_does_not_exchange_load_but_are_refused_when_named
     let xml = msd3_xml().replace("  </ModelVariables>", extra);
     let fmu = variant(&dir, &xml, "", "msd3").expect("a description with other types loads");
     drop(fmu);
-    let base = pd_loop("msd3.fmu");
+    let mut base = pd_loop("msd3.fmu");
+    base["fmus"][0]["trace"] = json!(["x", "v", "a"]);
     let scenario_error = |v: &serde_json::Value| {
         let path = dir.join("scenario.json");
         std::fs::write(&path, serde_json::to_string_pretty(v).expect("json")).expect("write");
@@ -463,26 +491,49 @@ fn fmi3_variables_the_importer_does_not_exchange_load_but_are_refused_when_named
             .map(|e| e.to_string())
             .unwrap_or_default()
     };
+    // A Float32 output into the controller's Float64 input: two types, both named.
     let mut v = base.clone();
     v["connections"][0]["from"] = json!("plant.y32");
     let text = scenario_error(&v);
-    assert!(
-        text.contains("\"y32\" is Float32") && text.contains("connections"),
-        "{text}"
+    assert_eq!(
+        text,
+        "connections[0]: FMU \"plant\" output \"y32\" (Float32) cannot feed FMU \"ctrl\" \
+         input \"x\" (Real): a connection carries a value of one type unchanged (Real to \
+         Real, Integer to Integer, Int64 to Int64, …; FMI 2.0's Real is FMI 3.0's Float64, \
+         its Integer FMI 3.0's Int32)"
     );
     let mut v = base.clone();
     v["connections"][0]["from"] = json!("plant.arr");
     let text = scenario_error(&v);
-    assert!(text.contains("\"arr\" is Float64 array"), "{text}");
+    assert!(text.contains("\"arr\" is a Float64 array"), "{text}");
+    // An Int8 start value out of its range is refused; in range it is accepted and set
+    // through fmi3SetInt8, which msd3 (without Int8 variables) refuses, naming it.
     let mut v = base.clone();
-    v["fmus"][0]["start"]["gain8"] = json!(2);
+    v["fmus"][0]["start"]["gain8"] = json!(200);
     let text = scenario_error(&v);
     assert!(
-        text.contains("\"gain8\" is Int8") && text.contains("start"),
+        text.contains("\"gain8\" is Int8: a whole number from -128 to 127 (got 200)"),
         "{text}"
     );
-    // Unnamed, they are left alone: the default trace holds only the Real outputs, and
-    // the loop runs.
+    let mut v = base.clone();
+    v["fmus"][0]["start"]["gain8"] = json!(2);
+    assert_eq!(
+        scenario_error(&v),
+        "",
+        "an Int8 start value in range is accepted"
+    );
+    let path = dir.join("scenario.json");
+    let s = dsmcosim::scenario::load(&path).expect("loads");
+    let e = dsmcosim::run::run_with(&s, &dir.join("out-int8"), Default::default())
+        .err()
+        .map(|e| e.to_string())
+        .unwrap_or_default();
+    assert!(
+        e.contains("fmi3SetInt8 returned fmi3Error"),
+        "the start value reaches the Int8 setter: {e}"
+    );
+    // Unnamed, with `trace` listing Float64 outputs, they are left alone and the loop
+    // runs.
     let (t, cols, _) = run(&dir, &base, &["plant.x", "plant.v", "plant.a"]);
     assert!(!t.is_empty() && cols[0].iter().all(|x| x.is_finite()));
 }

@@ -51,7 +51,10 @@ fn scene(dir: &Path, plant: &str, extra: Value) -> dsmcosim::scenario::Scenario 
 fn bits(w: &CoSim) -> Vec<u64> {
     (0..2)
         .flat_map(|f| w.fmu_outputs(f))
-        .map(f64::to_bits)
+        .map(|v| match v {
+            dsmcosim::fmu::Value::Float(x) => x.to_bits(),
+            other => panic!("the msd FMUs' outputs are Reals, got {other:?}"),
+        })
         .collect()
 }
 

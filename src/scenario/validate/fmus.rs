@@ -10,12 +10,12 @@ use std::path::{Path, PathBuf};
 use super::bodies::Ids;
 use super::checks::{num, whole_nanos};
 use crate::error::{Error, Result};
-use crate::fmu::{Causality, Fmu, ModelDescription, ScalarVariable, VarKind, Variability};
+use crate::fmu::{Causality, Fmu, ModelDescription, ScalarVariable, Value, VarKind, Variability};
 use crate::kernel::SimTime;
-use crate::scenario::file::{ConnectionFile, FmuFile};
+use crate::scenario::file::{ConnectionFile, FmuFile, StartValue};
 use crate::scenario::model::{
-    ChannelSpec, ConnectionSpec, DataKind, FmuSpec, FmuStart, FmuValueKind, FmuVar, Measure,
-    Scenario, SignalSink, SignalSource,
+    ChannelSpec, ConnectionSpec, DataKind, FmuSpec, FmuStart, FmuVar, Measure, Scenario,
+    SignalSink, SignalSource,
 };
 
 /// At most this many FMUs in a scenario: each is unpacked into its own directory and
@@ -89,21 +89,35 @@ pub(super) fn fmus(
     for (i, c) in connections.iter().enumerate() {
         let path = format!("connections[{i}]");
         let from_path = format!("{path}.from");
+        // What each end is, for a message refusing two types: `FMU "A" output "y"
+        // (Int32)`, `body B1's px (Real)`.
+        let from_kind;
         let from = match body_end(&from_path, &c.from, model, true)? {
-            Some((body, quantity)) => End::Body(body, quantity),
+            Some((body, quantity)) => {
+                from_kind = (VarKind::Real, format!("{:?} (a body's Real)", c.from));
+                End::Body(body, quantity)
+            }
             None => {
                 let (f, out) = endpoint(&from_path, &c.from, &names, &loaded)?;
                 check_causality(&from_path, &list[f].name, out, Causality::Output)?;
+                carried(&from_path, &list[f].name, out)?;
+                from_kind = (out.kind, described(&list[f].name, "output", out));
                 wired_out[f].push(out.name.clone());
                 End::Fmu(f, out.name.clone())
             }
         };
         let to_path = format!("{path}.to");
+        let to_kind;
         let to = match body_end(&to_path, &c.to, model, false)? {
-            Some((body, axis)) => End::Body(body, axis),
+            Some((body, axis)) => {
+                to_kind = (VarKind::Real, format!("{:?} (a body's Real)", c.to));
+                End::Body(body, axis)
+            }
             None => {
                 let (f, inp) = endpoint(&to_path, &c.to, &names, &loaded)?;
                 check_causality(&to_path, &list[f].name, inp, Causality::Input)?;
+                carried(&to_path, &list[f].name, inp)?;
+                to_kind = (inp.kind, described(&list[f].name, "input", inp));
                 let vr = inp.value_reference;
                 if let Some((first, other)) = fed_refs.get(&(f, vr)) {
                     if *other != inp.name {
@@ -124,6 +138,17 @@ pub(super) fn fmus(
                 End::Fmu(f, inp.name.clone())
             }
         };
+        if from_kind.0 != to_kind.0 {
+            return Err(Error::invalid(
+                path,
+                format!(
+                    "{} cannot feed {}: a connection carries a value of one type unchanged \
+                     (Real to Real, Integer to Integer, Int64 to Int64, …; FMI 2.0's Real is \
+                     FMI 3.0's Float64, its Integer FMI 3.0's Int32)",
+                    from_kind.1, to_kind.1
+                ),
+            ));
+        }
         if let Some(first) = fed.insert(c.to.clone(), i) {
             return Err(Error::invalid(
                 to_path,
@@ -171,6 +196,7 @@ pub(super) fn fmus(
         }
         let (f, out) = endpoint(&path, text, &names, &loaded)?;
         check_causality(&path, &list[f].name, out, Causality::Output)?;
+        carried(&path, &list[f].name, out)?;
         if cost_ends
             .iter()
             .any(|(g, n): &(usize, String)| *g == f && *n == out.name)
@@ -323,7 +349,15 @@ fn name(path: &str, name: &str) -> Result<()> {
 /// The FMUs that `cargo run --release --example build_fmus -- DIR` builds from
 /// `tests/fmus/` (`TEST_FMUS` of `tests/support/fmu_build.rs`): the shipped scenes read
 /// them from `scenarios/fmu/`, which a fresh clone does not hold.
-const BUILT_TEST_FMUS: [&str; 5] = ["msd.fmu", "pd.fmu", "faulty.fmu", "msd3.fmu", "quirks.fmu"];
+const BUILT_TEST_FMUS: [&str; 7] = [
+    "msd.fmu",
+    "pd.fmu",
+    "faulty.fmu",
+    "msd3.fmu",
+    "quirks.fmu",
+    "types.fmu",
+    "types3.fmu",
+];
 
 /// For a missing file that is one of [`BUILT_TEST_FMUS`], how to build it into the
 /// folder it is looked for in; else nothing.
@@ -429,17 +463,39 @@ fn endpoint<'a>(
     };
     let description = loaded[i].0.description();
     let v = variable(path, fmu, description, var)?;
-    if v.kind != VarKind::Real {
+    Ok((i, v))
+}
+
+/// `FMU "A" output "y" (Int32)`: a connection end as a message names it.
+fn described(fmu: &str, role: &str, v: &ScalarVariable) -> String {
+    format!("FMU {fmu:?} {role} {:?} ({})", v.name, v.type_name)
+}
+
+/// A connection end or a cost signal is a scalar number or Boolean: what a message
+/// carries and a cost measures. A String, a Binary, a Clock or an array is refused,
+/// naming the variable and its type.
+fn carried(path: &str, fmu: &str, v: &ScalarVariable) -> Result<()> {
+    if !v.dimensions.is_empty() {
         return Err(Error::invalid(
             path,
             format!(
-                "FMU {fmu:?}: variable {var:?} is {}; connections carry Real variables \
-                 (FMI 3.0: scalar Float64)",
-                v.kind
+                "FMU {fmu:?}: {:?} is a {} array; connections and costs take scalars (an \
+                 array output is traced, as {}[1], {}[2], …)",
+                v.name, v.type_name, v.name, v.name
             ),
         ));
     }
-    Ok((i, v))
+    if !v.kind.is_numeric() {
+        return Err(Error::invalid(
+            path,
+            format!(
+                "FMU {fmu:?}: {:?} is a {}; connections and costs take numbers and Booleans \
+                 (a String or Binary output is traced)",
+                v.name, v.type_name
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// A variable by name, or an error naming the FMU and the nearest names.
@@ -505,7 +561,7 @@ fn spec(
         .as_ref()
         .expect("ok: Fmu::load refuses an FMU without co-simulation");
     let mut start = Vec::with_capacity(f.start.len());
-    for (name, &value) in &f.start {
+    for (name, value) in &f.start {
         let p = format!("{path}.start.{name}");
         let v = variable(&p, &f.name, d, name)?;
         if !matches!(v.causality, Causality::Parameter | Causality::Input) {
@@ -524,62 +580,20 @@ fn spec(
                 format!("FMU {:?}: {name:?} is a constant", f.name),
             ));
         }
-        if !value.is_finite() {
-            return Err(Error::invalid(
-                p,
-                format!("must be finite (got {})", num(value)),
-            ));
-        }
-        let kind = match v.kind {
-            VarKind::Real => FmuValueKind::Real,
-            VarKind::Integer | VarKind::Enumeration => FmuValueKind::Integer,
-            VarKind::Boolean => FmuValueKind::Boolean,
-            VarKind::String => {
-                return Err(Error::invalid(
-                    p,
-                    format!(
-                        "FMU {:?}: {name:?} is a String; start values are numbers",
-                        f.name
-                    ),
-                ))
-            }
-            VarKind::Other(_) | VarKind::Array(_) => {
-                return Err(Error::invalid(
-                    p,
-                    format!(
-                        "FMU {:?}: {name:?} is {}; start values are set on Real, Integer, \
-                         Boolean and Enumeration scalars only (FMI 3.0: Float64, Int32, \
-                         Boolean, Enumeration)",
-                        f.name, v.kind
-                    ),
-                ))
-            }
-        };
-        let whole = value.fract() == 0.0 && value.abs() <= i32::MAX as f64;
-        if kind == FmuValueKind::Integer && !whole {
+        if !v.dimensions.is_empty() {
             return Err(Error::invalid(
                 p,
                 format!(
-                    "FMU {:?}: {name:?} is an Integer (got {})",
-                    f.name,
-                    num(value)
+                    "FMU {:?}: {name:?} is a {} array; start values are set on scalars",
+                    f.name, v.type_name
                 ),
             ));
         }
-        if kind == FmuValueKind::Boolean && value != 0.0 && value != 1.0 {
-            return Err(Error::invalid(
-                p,
-                format!(
-                    "FMU {:?}: {name:?} is a Boolean: 0 or 1 (got {})",
-                    f.name,
-                    num(value)
-                ),
-            ));
-        }
+        let value = start_value(&p, &f.name, d, v, value)?;
         start.push(FmuStart {
             name: name.clone(),
             vr: v.value_reference,
-            kind,
+            kind: v.kind,
             value,
         });
     }
@@ -589,13 +603,22 @@ fn spec(
             for (k, name) in list.iter().enumerate() {
                 let p = format!("{path}.trace[{k}]");
                 let v = variable(&p, &f.name, d, name)?;
-                if v.causality != Causality::Output || v.kind != VarKind::Real {
+                if v.causality != Causality::Output {
                     return Err(Error::invalid(
                         p,
                         format!(
-                            "FMU {:?}: {name:?} is not a Real output (causality {:?}, type \
-                             {})",
-                            f.name, v.causality, v.kind
+                            "FMU {:?}: {name:?} is not an output (causality {:?}, type {})",
+                            f.name, v.causality, v.type_name
+                        ),
+                    ));
+                }
+                if v.kind == VarKind::Clock {
+                    return Err(Error::invalid(
+                        p,
+                        format!(
+                            "FMU {:?}: {name:?} is a Clock, which is not traced (it needs \
+                             event mode)",
+                            f.name
                         ),
                     ));
                 }
@@ -609,22 +632,41 @@ fn spec(
         None => d
             .variables
             .iter()
-            .filter(|v| v.causality == Causality::Output && v.kind == VarKind::Real)
+            .filter(|v| v.causality == Causality::Output && v.kind != VarKind::Clock)
             .map(|v| v.name.clone())
             .collect(),
     };
-    let value_of = |v: &ScalarVariable| f.start.get(&v.name).copied().or(v.start).unwrap_or(0.0);
+    let value_of = |v: &ScalarVariable| {
+        start
+            .iter()
+            .find(|s| s.name == v.name)
+            .map(|s| s.value.clone())
+            .or_else(|| v.start.clone())
+            .unwrap_or_else(|| Value::zero(v.kind))
+    };
+    let shape_of = |v: &ScalarVariable| -> Result<Vec<usize>> {
+        d.shape(v).map_err(|e| {
+            Error::invalid(
+                format!("{path}.trace"),
+                format!("FMU {:?}: output {:?}: {e}", f.name, v.name),
+            )
+        })
+    };
     let outputs = d
         .variables
         .iter()
         .filter(|v| traced.contains(&v.name) || wired_out.contains(&v.name))
-        .map(|v| FmuVar {
-            name: v.name.clone(),
-            vr: v.value_reference,
-            traced: traced.contains(&v.name),
-            start: value_of(v),
+        .map(|v| {
+            Ok(FmuVar {
+                name: v.name.clone(),
+                vr: v.value_reference,
+                kind: v.kind,
+                traced: traced.contains(&v.name),
+                start: value_of(v),
+                shape: shape_of(v)?,
+            })
         })
-        .collect();
+        .collect::<Result<Vec<_>>>()?;
     let inputs = d
         .variables
         .iter()
@@ -632,8 +674,10 @@ fn spec(
         .map(|v| FmuVar {
             name: v.name.clone(),
             vr: v.value_reference,
+            kind: v.kind,
             traced: false,
             start: value_of(v),
+            shape: Vec::new(),
         })
         .collect();
     let step = match f.step {
@@ -657,6 +701,99 @@ fn spec(
         outputs,
         inputs,
         logging: f.logging,
+    })
+}
+
+/// The start value `given` for the scalar `v` of FMU `fmu` in its type's form, or an
+/// error naming the type and what it takes: a number within the type's range for the
+/// numeric types (a whole one for integers, 64-bit ones read without loss), a Boolean
+/// (or 0/1), a string for a String, hex digits for a Binary.
+fn start_value(
+    p: &str,
+    fmu: &str,
+    d: &ModelDescription,
+    v: &ScalarVariable,
+    given: &StartValue,
+) -> Result<Value> {
+    let (name, ty) = (&v.name, v.type_name);
+    let wrong = |what: &str| {
+        let got = match given {
+            StartValue::Bool(b) => b.to_string(),
+            StartValue::Number(n) => n.to_string(),
+            StartValue::Text(t) => format!("{t:?}"),
+        };
+        Error::invalid(
+            p,
+            format!("FMU {fmu:?}: {name:?} is {ty}: {what} (got {got})"),
+        )
+    };
+    // A whole number, exact: a JSON integer as written, or a float with no fraction
+    // within ±2^53 (where every whole f64 is exact).
+    let whole = |n: &serde_json::Number| -> Option<i128> {
+        if let Some(i) = n.as_i64() {
+            return Some(i.into());
+        }
+        if let Some(u) = n.as_u64() {
+            return Some(u.into());
+        }
+        n.as_f64()
+            .filter(|x| x.fract() == 0.0 && x.abs() <= 9_007_199_254_740_992.0)
+            .map(|x| x as i128)
+    };
+    let int_range = |lo: i128, hi: i128| -> Result<i128> {
+        match given {
+            StartValue::Number(n) => whole(n)
+                .filter(|i| (lo..=hi).contains(i))
+                .ok_or_else(|| wrong(&format!("a whole number from {lo} to {hi}"))),
+            _ => Err(wrong(&format!("a whole number from {lo} to {hi}"))),
+        }
+    };
+    let signed = |lo: i64, hi: i64| int_range(lo.into(), hi.into()).map(|i| Value::Int(i as i64));
+    let unsigned = |hi: u64| int_range(0, hi.into()).map(|i| Value::UInt(i as u64));
+    Ok(match v.kind {
+        VarKind::Real | VarKind::Float32 => {
+            let x = match given {
+                StartValue::Number(n) => n.as_f64(),
+                _ => None,
+            }
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| wrong("a finite number"))?;
+            if v.kind == VarKind::Real {
+                Value::Float(x)
+            } else if (x as f32).is_finite() {
+                Value::Float32(x as f32)
+            } else {
+                return Err(wrong("a number within Float32's range"));
+            }
+        }
+        VarKind::Boolean => match given {
+            StartValue::Bool(b) => Value::Bool(*b),
+            StartValue::Number(n) if whole(n) == Some(0) => Value::Bool(false),
+            StartValue::Number(n) if whole(n) == Some(1) => Value::Bool(true),
+            _ => return Err(wrong("true or false (or 0 or 1)")),
+        },
+        VarKind::String => match given {
+            StartValue::Text(t) if !t.contains('\0') => Value::Text(t.clone()),
+            _ => return Err(wrong("a JSON string without NUL characters")),
+        },
+        VarKind::Binary => match given {
+            StartValue::Text(t) => Value::Bytes(
+                crate::fmu::value::parse_hex(t)
+                    .map_err(|e| wrong(&format!("a string of hex bytes ({e})")))?,
+            ),
+            _ => return Err(wrong("a string of hex bytes (\"00ff\")")),
+        },
+        // FMI 2.0 passes an Enumeration as an int, FMI 3.0 as an Int64.
+        VarKind::Enumeration if d.is_fmi3() => signed(i64::MIN, i64::MAX)?,
+        VarKind::Integer | VarKind::Enumeration => signed(i32::MIN.into(), i32::MAX.into())?,
+        VarKind::Int8 => signed(i8::MIN.into(), i8::MAX.into())?,
+        VarKind::Int16 => signed(i16::MIN.into(), i16::MAX.into())?,
+        VarKind::Int64 => signed(i64::MIN, i64::MAX)?,
+        VarKind::UInt8 => unsigned(u8::MAX.into())?,
+        VarKind::UInt16 => unsigned(u16::MAX.into())?,
+        VarKind::UInt32 => unsigned(u32::MAX.into())?,
+        VarKind::UInt64 => unsigned(u64::MAX)?,
+        VarKind::Clock => return Err(wrong("not set by dsmcosim (a Clock needs event mode)")),
     })
 }
 
