@@ -1,6 +1,6 @@
-//! Builds the test FMUs (`tests/fmus/`: msd, pd, faulty, quirks, and msd3, msd in FMI 3.0
-//! form) into a directory, for the example scenarios that couple FMUs and for checking them
-//! with other FMI tools:
+//! Builds the test FMUs (`tests/fmus/`: msd, pd, faulty, quirks, msd3 (msd in FMI 3.0
+//! form), and types and types3 (an output of every FMI 2.0 and 3.0 type)) into a directory,
+//! for the example scenarios that couple FMUs and for checking them with other FMI tools:
 //!
 //! ```text
 //! cargo run --release --example build_fmus -- OUTDIR

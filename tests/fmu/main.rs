@@ -21,3 +21,4 @@ mod own_fmu;
 mod quirks;
 mod states;
 mod status;
+mod types;

@@ -11,6 +11,10 @@
  * and, after including it, the model_* functions declared below. Optionally:
  *   MODEL_REFUSES_STATE(in)  an expression true when fmi2GetFMUstate must fail (a model
  *                            whose state saving breaks; default: never)
+ *   MODEL_HAS_BOOLEAN_AND_STRING  defined when the model has Boolean and String
+ *                            variables: it then provides model_get_boolean,
+ *                            model_set_boolean, model_get_string and model_set_string
+ *                            (a String it gives stays valid until its next call)
  * A model asks to stop by setting `in->terminated` and returning fmi2Discard from
  * model_do_step after completing the step: fmi2GetBooleanStatus(fmi2Terminated) then
  * answers true and the time advances to the step's end.
@@ -45,6 +49,12 @@ static fmi2Status model_set_real(Instance *in, fmi2ValueReference vr, fmi2Real v
 static fmi2Status model_get_integer(Instance *in, fmi2ValueReference vr, fmi2Integer *value);
 static fmi2Status model_set_integer(Instance *in, fmi2ValueReference vr, fmi2Integer value);
 static fmi2Status model_do_step(Instance *in, fmi2Real t, fmi2Real h);
+#ifdef MODEL_HAS_BOOLEAN_AND_STRING
+static fmi2Status model_get_boolean(Instance *in, fmi2ValueReference vr, fmi2Boolean *value);
+static fmi2Status model_set_boolean(Instance *in, fmi2ValueReference vr, fmi2Boolean value);
+static fmi2Status model_get_string(Instance *in, fmi2ValueReference vr, fmi2String *value);
+static fmi2Status model_set_string(Instance *in, fmi2ValueReference vr, fmi2String value);
+#endif
 
 /* Logs `message` through the importer: errors always, the rest when logging is on. The
  * text is formatted here and any '%' dropped, so importers that printf the message and
@@ -208,7 +218,39 @@ fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
     return fmi2OK;
 }
 
-/* None of the test models has Boolean or String variables. */
+#ifdef MODEL_HAS_BOOLEAN_AND_STRING
+/* Each call's values through the model's hooks, reference by reference. */
+#define BY_REFERENCE(hook, value_i)                                                         \
+    Instance *in = (Instance *)c;                                                           \
+    if (in == NULL) return fmi2Error;                                                       \
+    for (size_t i = 0; i < nvr; i++) {                                                      \
+        fmi2Status s = hook(in, vr[i], value_i);                                            \
+        if (s != fmi2OK) return s;                                                          \
+    }                                                                                       \
+    return fmi2OK;
+
+fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                          fmi2Boolean value[]) {
+    BY_REFERENCE(model_get_boolean, &value[i])
+}
+
+fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                          const fmi2Boolean value[]) {
+    BY_REFERENCE(model_set_boolean, value[i])
+}
+
+fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                         fmi2String value[]) {
+    BY_REFERENCE(model_get_string, &value[i])
+}
+
+fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                         const fmi2String value[]) {
+    BY_REFERENCE(model_set_string, value[i])
+}
+#undef BY_REFERENCE
+#else
+/* The model has no Boolean or String variables. */
 fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                           fmi2Boolean value[]) {
     (void)vr;
@@ -236,6 +278,8 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
     (void)value;
     return nvr == 0 ? fmi2OK : refuse((Instance *)c, "no String variables");
 }
+
+#endif
 
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state) {
     Instance *in = (Instance *)c;

@@ -10,8 +10,9 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 /// The test FMUs under `tests/fmus/`: each `<stem>.c` with its `<stem>.xml`; the stem
-/// is also the model identifier. `msd3` is msd in FMI 3.0 form.
-pub const TEST_FMUS: [&str; 5] = ["msd", "pd", "faulty", "msd3", "quirks"];
+/// is also the model identifier. `msd3` is msd in FMI 3.0 form; `types` and `types3`
+/// have an output of every FMI 2.0 and FMI 3.0 type (and arrays, in FMI 3.0).
+pub const TEST_FMUS: [&str; 7] = ["msd", "pd", "faulty", "msd3", "quirks", "types", "types3"];
 
 /// Where a test reads shipped scenario `file` from: the file itself, or, for a scene with
 /// FMUs (which reads `fmu/*.fmu` beside it, built for users by `cargo run --example
