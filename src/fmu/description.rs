@@ -84,9 +84,9 @@ pub struct ScalarVariable {
     /// FMI 3.0: the `<Dimension>` children of an array variable, outermost first; empty
     /// for a scalar (and every FMI 2.0 variable).
     pub dimensions: Vec<Dimension>,
-    /// `start` of a scalar in its type's form (FMI 3.0 String: the first
-    /// `<Start value>`; Binary: its hex bytes); `None` when absent, for a Clock and for
-    /// an array.
+    /// `start` of a scalar in its type's form (FMI 3.0 String and Binary: the first
+    /// `<Start value>`, a Binary's as hex bytes); `None` when absent, for a Clock and
+    /// for an array.
     pub start: Option<Value>,
 }
 
@@ -458,8 +458,9 @@ fn variable3(index: usize, n: Node) -> Result<ScalarVariable, FmuError> {
         .filter(|c| c.has_tag_name("Dimension"))
         .map(|d| dimension(d, &at("Dimension")))
         .collect::<Result<Vec<_>, _>>()?;
-    // A String's start values are `<Start value>` children (one per element).
-    let text = if kind == VarKind::String {
+    // A String's or a Binary's start values are `<Start value>` children (one per
+    // element), as FMI 3.0's schema has them.
+    let text = if matches!(kind, VarKind::String | VarKind::Binary) {
         n.children()
             .find(|c| c.has_tag_name("Start"))
             .and_then(|c| c.attribute("value"))

@@ -568,3 +568,40 @@ fn an_array_beyond_the_size_limit_is_refused_before_anything_is_allocated() {
         "{e}"
     );
 }
+
+#[test]
+fn types3_start_values_read_in_their_types_forms() {
+    use dsmcosim::fmu::{Dimension, ModelDescription, Value};
+    let xml = std::fs::read_to_string(fmus_dir().join("types3.xml")).unwrap();
+    let d = ModelDescription::parse(&xml).expect("types3.xml parses");
+    let start = |n: &str| d.variable(n).and_then(|v| v.start.clone());
+    assert_eq!(start("f32_p"), Some(Value::Float32(0.1)));
+    assert_eq!(start("i64_p"), Some(Value::Int(9007199254740993)));
+    assert_eq!(start("u64_p"), Some(Value::UInt(u64::MAX)));
+    assert_eq!(start("str_p"), Some(Value::Text("a, \"b\"".into())));
+    assert_eq!(start("bin_p"), Some(Value::Bytes(vec![0x00, 0xff])));
+    assert_eq!(start("enum_p"), Some(Value::Int(2)));
+    let y = d.variable("y").expect("y");
+    assert_eq!(
+        (y.type_name, y.dimensions.clone()),
+        ("Float64", vec![Dimension::Parameter(15)])
+    );
+    assert_eq!(d.shape(y).ok(), Some(vec![3]), "n_y's start value");
+    // Without a start, a structural parameter cannot size an array.
+    let no_start = xml.replace(
+        r#"variability="fixed" start="3"/>"#,
+        r#"variability="fixed"/>"#,
+    );
+    let d = ModelDescription::parse(&no_start).expect("parses");
+    let e = d
+        .shape(d.variable("y").expect("y"))
+        .err()
+        .map(|e| e.to_string());
+    assert_eq!(
+        e.as_deref(),
+        Some(
+            "modelDescription.xml: Float64 'y'/Dimension: its size is UInt64 'n_y' \
+             (valueReference 15), which has no whole non-negative start value"
+        )
+    );
+}
