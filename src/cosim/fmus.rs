@@ -74,6 +74,9 @@ struct Group {
     count: usize,
     /// The index (into `FmuSpec::outputs` or `inputs`) of each variable.
     members: Vec<usize>,
+    /// Scalar Reals (every FMU's usual case): the values of one call, reused, so a step
+    /// reads and sets them without allocating.
+    reals: Option<Vec<f64>>,
 }
 
 /// `vars` grouped by type, in order of first appearance (the calls' order).
@@ -93,6 +96,11 @@ fn groups(vars: &[FmuVar]) -> Vec<Group> {
         g.vrs.push(v.vr);
         g.count += v.len();
         g.members.push(k);
+    }
+    for g in &mut out {
+        if g.kind == Some(VarKind::Real) && g.count == g.vrs.len() {
+            g.reals = Some(vec![0.0; g.count]);
+        }
     }
     out
 }
@@ -115,11 +123,18 @@ fn initial(outputs: &[FmuVar]) -> Vec<Vec<Value>> {
 /// Reads every output of `reads` into `into` (`scratch` holds one call's values).
 fn read(
     inst: &Instance,
-    reads: &[Group],
+    reads: &mut [Group],
     scratch: &mut Vec<Value>,
     into: &mut [Vec<Value>],
 ) -> std::result::Result<(), crate::fmu::FmuError> {
     for g in reads {
+        if let Some(buf) = &mut g.reals {
+            inst.get_real(&g.vrs, buf)?;
+            for (&k, &x) in g.members.iter().zip(buf.iter()) {
+                into[k][0] = Value::Float(x);
+            }
+            continue;
+        }
         let kind = g.kind.expect("ok: every group has its type");
         scratch.clear();
         inst.get_values(kind, &g.vrs, g.count, scratch)?;
@@ -262,7 +277,7 @@ impl FmuUnit {
                 inst.set_state(&state).map_err(fmu_error)?;
             }
             None => {
-                read(&inst, &self.reads, &mut self.scratch, &mut self.pending)
+                read(&inst, &mut self.reads, &mut self.scratch, &mut self.pending)
                     .map_err(fmu_error)?;
                 finite(spec, self.time, &self.pending)?;
                 self.published.clone_from(&self.pending);
@@ -287,7 +302,14 @@ impl FmuUnit {
                 .unwrap_or_else(|poisoned| poisoned.into_inner());
             // The inputs hold over the lock-step: set once for all its communication
             // steps.
-            for g in &self.writes {
+            for g in &mut self.writes {
+                if let Some(buf) = &mut g.reals {
+                    for (x, &k) in buf.iter_mut().zip(&g.members) {
+                        *x = self.inputs[k].as_f64().unwrap_or(f64::NAN);
+                    }
+                    inst.set_real(&g.vrs, buf).map_err(fmu_error)?;
+                    continue;
+                }
                 let kind = g.kind.expect("ok: every group has its type");
                 self.scratch.clear();
                 let held = g.members.iter().map(|&k| self.inputs[k].clone());
@@ -304,7 +326,7 @@ impl FmuUnit {
                     // stays at the point before, whose outputs are read already.
                     if reached >= from + over {
                         self.time = SimTime(self.time.0.saturating_add(h.0));
-                        read(inst, &self.reads, &mut self.scratch, &mut self.pending)
+                        read(inst, &mut self.reads, &mut self.scratch, &mut self.pending)
                             .map_err(fmu_error)?;
                         finite(spec, self.time, &self.pending)?;
                     }
@@ -314,7 +336,8 @@ impl FmuUnit {
                 self.time = SimTime(self.time.0.saturating_add(h.0));
             }
             if self.stop.is_none() {
-                read(inst, &self.reads, &mut self.scratch, &mut self.pending).map_err(fmu_error)?;
+                read(inst, &mut self.reads, &mut self.scratch, &mut self.pending)
+                    .map_err(fmu_error)?;
                 finite(spec, self.time, &self.pending)?;
             }
         }

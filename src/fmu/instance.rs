@@ -785,8 +785,8 @@ impl Instance {
         match self.core.shared.api {
             Api::Fmi2(f) => {
                 if n_values != refs.len() {
-                    let function = self.pick("fmi2GetReal", "");
-                    return Err(self.length(function, refs.len(), n_values));
+                    // FMI 2.0 has no arrays: one value per reference.
+                    return Err(self.length("fmi2Get*", refs.len(), n_values));
                 }
                 match kind {
                     VarKind::Real => {

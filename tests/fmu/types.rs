@@ -456,6 +456,52 @@ fn integer_boolean_and_real_outputs_connect_exactly_where_the_types_agree() {
     assert!(b64.iter().any(|x| x % 2 == 1) && b64[STEPS as usize] > 1 << 54);
 }
 
+#[test]
+fn a_run_of_typed_outputs_resumed_from_any_checkpoint_ends_with_the_same_digest_and_trace() {
+    use dsmcosim::kernel::SimTime;
+    use dsmcosim::run::{resume, run_with, RunOptions};
+    let dir = scratch("fmu-types", "checkpoint");
+    build(&dir);
+    // Every type traced (Strings and Binary included) and Int64, Int32, Boolean values
+    // in flight between two FMUs: a checkpoint holds them all, typed.
+    let v = scene(
+        json!([
+            {"name": "A", "path": "types3.fmu", "node": 1, "start": types3_start()},
+            {"name": "B", "path": "types3.fmu", "node": 2},
+            {"name": "C", "path": "types.fmu", "node": 2}
+        ]),
+        json!([
+            {"from": "A.i64_out", "to": "B.i64_in", "channel": "wire"},
+            {"from": "A.i32_out", "to": "B.i32_in", "channel": "wire"},
+            {"from": "A.bool_out", "to": "B.bool_in", "channel": "wire"},
+            {"from": "C.i_out", "to": "A.i32_in", "channel": "wire"}
+        ]),
+    );
+    let path = dir.join("scenario.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&v).unwrap()).unwrap();
+    let s = dsmcosim::scenario::load(&path).unwrap_or_else(|e| panic!("scenario: {e}"));
+    let opts = RunOptions {
+        checkpoint_every: SimTime::from_secs_f64(0.3),
+        ..RunOptions::default()
+    };
+    let full = run_with(&s, &dir.join("full"), opts).expect("run");
+    let plain = run_with(&s, &dir.join("plain"), RunOptions::default()).expect("run");
+    assert_eq!(full.digest, plain.digest);
+    let mut cps: Vec<PathBuf> = std::fs::read_dir(dir.join("full/checkpoints"))
+        .expect("checkpoints")
+        .map(|e| e.unwrap().path())
+        .collect();
+    cps.sort();
+    assert_eq!(cps.len(), 3, "{cps:?}");
+    let trace = std::fs::read(dir.join("full/trace.csv")).unwrap();
+    for (i, cp) in cps.iter().enumerate() {
+        let out = dir.join(format!("resumed{i}"));
+        let r = resume(cp, &out, RunOptions::default()).expect("resume");
+        assert_eq!(r.digest, full.digest, "resumed from {}", cp.display());
+        assert_eq!(std::fs::read(out.join("trace.csv")).unwrap(), trace);
+    }
+}
+
 /// Runs `v` expecting a refusal: exit 2, the message on stderr, nothing written, no
 /// panic.
 fn refused(dir: &Path, name: &str, v: &Value) -> String {
