@@ -208,7 +208,8 @@ pub struct FmuFile {
     /// starts).
     #[serde(default)]
     pub start: std::collections::BTreeMap<String, StartValue>,
-    /// Outputs recorded in trace.csv (and the digest); default every Real output.
+    /// Outputs of any type recorded in trace.csv (and the digest), an array by its name
+    /// (columns `<variable>[1]` …); default every output.
     #[serde(
         default,
         deserialize_with = "present",
@@ -242,9 +243,11 @@ fn default_fmu_node() -> usize {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ConnectionFile {
-    /// Source, `<fmu>.<variable>`: a Real output; required.
+    /// Source, `<fmu>.<variable>`: a scalar output that is a number or a Boolean (or a
+    /// body's `B<id>.px` … `B<id>.vz`); required.
     pub from: String,
-    /// Target, `<fmu>.<variable>`: a Real input fed by no other connection; required.
+    /// Target, `<fmu>.<variable>`: an input of the source's type fed by no other
+    /// connection (or a body's `B<id>.fx` … `B<id>.fz`); required.
     pub to: String,
     /// Name of the channel that samples the source every τ and delivers each sample
     /// after its latency; required.
@@ -693,7 +696,8 @@ pub struct MeasurementFile {
     )]
     pub period: Option<f64>,
     /// FMU outputs whose RMS over a window, summed, is the window's cost instead of the
-    /// links' `Σ RMS w` (`<fmu>.<variable>`, Real outputs); default none (the links).
+    /// links' `Σ RMS w` (`<fmu>.<variable>`, scalar outputs that are numbers or
+    /// Booleans); default none (the links).
     #[serde(
         default,
         deserialize_with = "present",

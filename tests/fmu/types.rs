@@ -651,3 +651,24 @@ fn types3_start_values_read_in_their_types_forms() {
         )
     );
 }
+
+#[test]
+fn a_multi_dimensional_array_names_its_elements_row_major_from_1() {
+    use dsmcosim::fmu::{Value, VarKind};
+    use dsmcosim::scenario::model::FmuVar;
+    let var = |shape: Vec<usize>| FmuVar {
+        name: "A".into(),
+        vr: 7,
+        kind: VarKind::Real,
+        traced: true,
+        start: Value::Float(0.0),
+        shape,
+    };
+    assert_eq!(
+        var(vec![2, 3]).element_names(),
+        ["A[1,1]", "A[1,2]", "A[1,3]", "A[2,1]", "A[2,2]", "A[2,3]"]
+    );
+    assert_eq!(var(vec![3]).element_names(), ["A[1]", "A[2]", "A[3]"]);
+    assert_eq!(var(vec![]).element_names(), ["A"]);
+    assert!(var(vec![2, 0]).element_names().is_empty());
+}
