@@ -672,3 +672,43 @@ fn a_multi_dimensional_array_names_its_elements_row_major_from_1() {
     assert_eq!(var(vec![]).element_names(), ["A"]);
     assert!(var(vec![2, 0]).element_names().is_empty());
 }
+
+#[test]
+fn a_string_past_max_value_bytes_stops_the_run_naming_the_fmu_function_and_variable() {
+    let dir = scratch("fmu-types", "long-string");
+    let max = dsmcosim::fmu::MAX_VALUE_BYTES;
+    for (bytes, name) in [(max, "at-cap"), (max + 1, "past-cap")] {
+        let src = dir.join(format!("{name}.c"));
+        let c = format!(
+            "#define TYPES3_STRING_BYTES {bytes}\n#include \"{}\"\n",
+            fmus_dir().join("types3.c").display()
+        );
+        std::fs::write(&src, c).unwrap();
+        let fmu = dir.join(format!("{name}.fmu"));
+        build_fmu(&src, &fmus_dir().join("types3.xml"), "types3", &fmu)
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+    }
+    let one = |path: &str| {
+        scene(
+            json!([{"name": "u", "path": path, "trace": ["str_out"]}]),
+            json!([]),
+        )
+    };
+    // At the cap, the whole string is traced.
+    let (_, rows, _, _) = traced(&dir, "ok", &one("at-cap.fmu"));
+    assert!(rows
+        .iter()
+        .all(|r| r[1].len() == max && r[1].bytes().all(|b| b == b'x')));
+    // One byte more: exit 3, the FMU, the function and the value reference named.
+    let (o, _) = run(&dir, "too-long", &one("past-cap.fmu"));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(3), "{stderr}");
+    assert!(
+        stderr.contains(
+            "MAX_VALUE_BYTES (a value FMU 'u' gave through fmi3GetString for value reference \
+             31) exceeds its cap of 1048576"
+        ),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}

@@ -24,6 +24,7 @@
  *     z[i]     = i * n, i = 1, 2                     Int32 array of fixed size 2
  *
  * tests/fmu/types.rs computes the same values and compares each trace column with them.
+ * Built with TYPES3_STRING_BYTES defined, str_out is that many bytes of 'x' instead.
  * Every function of the standard is exported; those this model does not support answer
  * fmi3Error. A state is a copy of ModelData (strings and bytes held in it).
  */
@@ -376,6 +377,19 @@ fmi3Status fmi3GetString(fmi3Instance instance, const fmi3ValueReference vr[], s
             GET_ONE(VR_STR_P, d->str_p)
         case VR_STR_OUT:
             if (k >= nValues) return refuse(in, "too few values for the references");
+#ifdef TYPES3_STRING_BYTES
+            /* A test build: str_out is TYPES3_STRING_BYTES bytes of 'x', for an importer's
+             * cap on the values it copies. */
+            {
+                static char *text = NULL;
+                if (text == NULL) text = (char *)malloc(TYPES3_STRING_BYTES + 1);
+                if (text == NULL) return refuse(in, "out of memory");
+                memset(text, 'x', TYPES3_STRING_BYTES);
+                text[TYPES3_STRING_BYTES] = '\0';
+                values[k++] = text;
+                break;
+            }
+#endif
             snprintf(d->str_out, sizeof d->str_out, "%s #%" PRId64, d->str_p, d->n);
             values[k++] = d->str_out;
             break;
