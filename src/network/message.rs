@@ -53,7 +53,9 @@ pub enum Payload {
     Signal {
         /// Connection index (`Scenario::connections`).
         connection: usize,
-        /// The output's value at the sample time.
+        /// The output's value at the sample time, as [`crate::fmu::Value::to_carrier`]
+        /// makes it: a number as itself, an Int64 or UInt64 as its 64 bits
+        /// reinterpreted (never computed with on the way).
         value: f64,
     },
     /// A border link's load on a ghosted body, for the body's owner.
