@@ -153,7 +153,7 @@ pub(crate) unsafe fn text(p: *const c_char) -> String {
 
 /// The logger: prints `[instance] status category: message` to stderr when the
 /// instance's logging is on, and keeps and prints every message of status warning and
-/// worse whether or not it is ([`LogTarget::message`]). Never unwinds (a write error is
+/// worse whether or not it is (`LogTarget::message`). Never unwinds (a write error is
 /// ignored).
 ///
 /// # Safety

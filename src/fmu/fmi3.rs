@@ -79,7 +79,7 @@ pub type LogMessage = unsafe extern "C" fn(
 
 /// The log callback: prints `[instance] status category: message` to stderr when the
 /// instance's logging is on, and keeps and prints every message of status warning and
-/// worse whether or not it is ([`super::fmi2::LogTarget::message`]). `env` is the instance's [`super::fmi2::LogTarget`] (shared
+/// worse whether or not it is (`fmi2::LogTarget::message`). `env` is the instance's [`super::fmi2::LogTarget`] (shared
 /// with FMI 2.0: it holds the instance's name, which FMI 3.0 no longer passes). Never
 /// unwinds (a write error is ignored).
 ///
