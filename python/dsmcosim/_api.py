@@ -274,9 +274,11 @@ class Run:
             panels.append(violation)
         elif trace is not None and len(trace.columns) > 1:
             # An FMU's outputs are `unit.variable`; the bodies' invariants (Px … KE)
-            # are left out when there are such signals.
-            named = [c for c in trace.columns if "." in c]
-            signals = (named or [c for c in trace.columns if c != "t"])[:8]
+            # are left out when there are such signals, and so are String and Binary
+            # outputs (text, not numbers: no curve).
+            numeric = set(trace.select_dtypes(include=["number", "bool"]).columns)
+            named = [c for c in trace.columns if "." in c and c in numeric]
+            signals = (named or [c for c in trace.columns if c != "t" and c in numeric])[:8]
 
             def traced(ax: Any) -> None:
                 assert trace is not None
@@ -691,7 +693,8 @@ class Observation:
     `orientations` (n × 4 unit quaternions w, x, y, z, body to world; 0 × 4 for point
     masses), `rows` (constraint rows' names, `L1` or `J2_0`, as trace.csv names them),
     `w` [m] and `f` [N] per row, `max_w` [m], `signals` (each traced FMU output by
-    its trace column name, `unit.variable`), and `deliveries`: a DataFrame with the
+    its trace column name, `unit.variable`, an array's elements `unit.variable[i]`, as
+    the Python value of its FMI type: float, int, bool, str or bytes), and `deliveries`: a DataFrame with the
     last delivery on every route seen since the co-simulation was made or forked (a
     resumed or unpickled one starts with none) — `channel`, `from_node`, `to_node`
     (1-based), `kind` (`state`, `force`, `line`, `signal`), `element` (the body `B3`,
@@ -710,7 +713,7 @@ class Observation:
         self.w = np.asarray(seen["w"], dtype=np.float64)
         self.f = np.asarray(seen["f"], dtype=np.float64)
         self.max_w: float = seen["max_w"]
-        self.signals: Dict[str, float] = dict(seen["signals"])
+        self.signals: Dict[str, Any] = dict(seen["signals"])
         self.deliveries = pd.DataFrame(
             list(seen["deliveries"]),
             columns=["channel", "from_node", "to_node", "kind", "element", "sent",
