@@ -690,6 +690,20 @@ fn write_summary(out: &Path, run: &Ran) -> Result<()> {
                     "generation_tool": f.generation_tool,
                     "node": f.node + 1,
                     "step": f.step.as_secs_f64(),
+                    // trace.csv's columns of this FMU and the FMI type of each (FMI 3.0's
+                    // names: Float64, Int32, …), for a reader that types them.
+                    "trace_columns": f
+                        .outputs
+                        .iter()
+                        .filter(|v| v.traced)
+                        .flat_map(|v| {
+                            let names = v.element_names().into_iter();
+                            names.map(move |n| json!({
+                                "column": format!("{}.{n}", f.name),
+                                "type": v.kind.fmi3_name(),
+                            }))
+                        })
+                        .collect::<Vec<_>>(),
                     "messages": messages,
                     "messages_not_kept": not_kept,
                 })

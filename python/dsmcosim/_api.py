@@ -179,25 +179,51 @@ _EXACT: Dict[str, Any] = ({"float_precision": "round_trip"}
                           if int(pd.__version__.split(".")[0]) < 3 else {})
 
 
+# An FMU output's FMI type (summary.json's `fmus[].trace_columns`) → its column's dtype:
+# integers exact (nullable Int64/UInt64, so an Int64 or a UInt64 never passes through
+# a float), Booleans as their 0/1, Strings as text, Binary (hex in the file) as bytes, a
+# Float32 read as the float32 it was and widened to float64 (as `observe()` gives it).
+_FMI_DTYPES = {"Float64": "float64", "Float32": "float32", "UInt8": "UInt64",
+               "UInt16": "UInt64", "UInt32": "UInt64", "UInt64": "UInt64",
+               "String": "object", "Binary": "object"}
+
+
+def _fmi_dtype(fmi_type: str) -> str:
+    return _FMI_DTYPES.get(fmi_type, "Int64")  # Int8 … Int64, Boolean, Enumeration
+
+
 def read_table(path: Union[str, "os.PathLike[str]"],
                columns: Optional[Sequence[str]] = None,
-               sweep_axes: Optional[Mapping[str, str]] = None) -> pd.DataFrame:
+               sweep_axes: Optional[Mapping[str, str]] = None,
+               fmi_types: Optional[Mapping[str, str]] = None) -> pd.DataFrame:
     """One of a run's (or a sweep's) CSV files as a DataFrame, `columns` only if given.
 
     Every float is the file's value to the bit (pandas' round-trip parser); each column
     has one type whatever its values: float64 for quantities (times included), nullable
     Int64 for counts and ids (UInt64 for seeds), object for text; an empty cell, a value
     the run did not produce, is NaN (or <NA>), as is a NaN the run wrote. `sweep_axes` gives a sweep's axis
-    columns their types (from the sweep's values)."""
+    columns their types (from the sweep's values); `fmi_types` a trace's FMU columns
+    theirs (column → FMI type): integers exact (Int64, UInt64), Booleans 0/1 (Int64), a
+    Float32 as the float32 it was (widened), a String as written (an empty one or "NaN"
+    included), a Binary as bytes."""
     header = pd.read_csv(path, nrows=0).columns
     wanted = list(header) if columns is None else list(columns)
     missing = [c for c in wanted if c not in header]
     if missing:
         raise KeyError(f"{os.fspath(path)} has no column {missing[0]!r} "
                        f"(it has {', '.join(header[:8])}{', …' if len(header) > 8 else ''})")
-    dtypes: Dict[str, str] = {c: _dtype(c, sweep_axes or {}) for c in wanted}
+    fmi = fmi_types or {}
+    dtypes: Dict[str, str] = {c: _fmi_dtype(fmi[c]) if c in fmi else _dtype(c, sweep_axes or {})
+                              for c in wanted}
+    text = {c for c in wanted if fmi.get(c) in ("String", "Binary")}
+    na = {c: ["", "NaN"] for c in wanted if c not in text}
     table: pd.DataFrame = pd.read_csv(path, usecols=wanted, dtype=dtypes, keep_default_na=False,
-                       na_values=["", "NaN"], **_EXACT)
+                                      na_values=na, **_EXACT)
+    for c in wanted:
+        if fmi.get(c) == "Float32":
+            table[c] = table[c].astype("float64")
+        elif fmi.get(c) == "Binary":
+            table[c] = table[c].map(bytes.fromhex)
     return table[wanted]
 
 
@@ -227,7 +253,9 @@ class Run:
         if name not in _TABLES:
             raise ValueError(f"a run's tables are {', '.join(_TABLES)}, not {name!r}")
         path = self.directory / _TABLES[name]
-        return read_table(path, columns) if path.is_file() else None
+        fmi_types = {c["column"]: c["type"] for f in self.summary.get("fmus", [])
+                     for c in f.get("trace_columns", [])} if name == "trace" else {}
+        return read_table(path, columns, fmi_types=fmi_types) if path.is_file() else None
 
     def _cached(self, name: str) -> Optional[pd.DataFrame]:
         if name not in self._tables:

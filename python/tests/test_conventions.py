@@ -448,6 +448,32 @@ def test_observe_reads_an_fmus_outputs(tmp_path):
     assert seen.signals and all(row[name] == value for name, value in seen.signals.items())
 
 
+def test_fmu_outputs_of_every_type_read_as_their_python_types_in_observe_and_the_trace(tmp_path):
+    fmu = SCENARIOS / "fmu" / "types3.fmu"
+    if not fmu.is_file():
+        pytest.skip("the test FMUs are built by `cargo run --release --example build_fmus "
+                    "-- scenarios/fmu`")
+    scene = {"name": "types3", "seed": 1, "duration": 1.0, "dt": 0.1,
+             "output": {"decimation": 1},
+             "fmus": [{"name": "u", "path": str(fmu),
+                       "start": {"f32_p": 0.3, "str_p": "NaN", "i64_p": 9007199254740993}}]}
+    sim = dsmcosim.CoSim(scene)
+    sim.advance(0.7)
+    seen = sim.observe()
+    cli = dsmcosim.run(scene, tmp_path / "out")
+    row = cli.trace[cli.trace["t"] == 0.7].iloc[0]
+    assert len(seen.signals) == 19  # 14 scalars, y[1..3], z[1..2]
+    assert all(row[name] == value for name, value in seen.signals.items())
+    # Each in its type: 2^53 + 1 + 7 exact, a UInt64 near 2^64, text, bytes, a Float32.
+    assert seen.signals["u.i64_out"] == 9007199254741000 == row["u.i64_out"]
+    assert seen.signals["u.u64_out"] == 2**64 - 1 - 7 == row["u.u64_out"]
+    assert seen.signals["u.str_out"] == "NaN #7" == row["u.str_out"]
+    assert seen.signals["u.bin_out"] == bytes([0, 255, 7]) == row["u.bin_out"]
+    assert seen.signals["u.bool_out"] is True
+    import numpy as np
+    assert seen.signals["u.f32_out"] == float(np.float32(0.3) * np.float32(7))
+
+
 def test_an_fmu_output_that_is_not_a_number_is_a_divergence_naming_it(tmp_path):
     fmu = SCENARIOS / "fmu" / "quirks.fmu"
     if not fmu.is_file():
