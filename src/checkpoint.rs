@@ -31,7 +31,7 @@ use crate::trace::Recorder;
 pub const MAGIC: &[u8; 16] = b"DSMCOSIM-CKPT\0\0\0";
 /// The checkpoint layout version this binary reads and writes; bumped whenever any
 /// serialized type changes.
-pub const VERSION: u32 = 24;
+pub const VERSION: u32 = 25;
 /// Length of the header: magic, version, body hash [bytes].
 const HEADER: usize = 16 + 4 + 32;
 

@@ -19,7 +19,7 @@ use crate::kernel::SimTime;
 use crate::output::run_dir::claim;
 use crate::output::{write_atomic, AtomicFile};
 use crate::report::{envelope, write_line_plot, LinePlot, Scale, Series};
-use crate::scenario::model::{Scenario, Solver, Stabilizer};
+use crate::scenario::model::{Scenario, Solver, Stabilizer, Tank};
 use crate::trace::{NetworkLog, Recorder};
 
 pub mod budget;
@@ -658,15 +658,29 @@ fn write_summary(out: &Path, run: &Ran) -> Result<()> {
     }
     if let Some(p) = &scenario.partition {
         let mut ports = crate::partition::coupling::PortAccount::default();
+        let (mut port_count, mut peaks) = (0, 0.0);
         for node in world.nodes() {
             let e = node.port_energy();
             ports.taken += e.taken;
             ports.given += e.given;
             ports.dissipated += e.dissipated;
+            port_count += node.bodies.len() - node.owned;
+            peaks += node.energy_scale();
         }
         let mut coupling = json!({"scheme": p.coupling.name()});
         if let Some(tank) = p.coupling.tank() {
-            coupling["tank_j"] = json!(tank);
+            // What the coupling could create over the run, all nodes together.
+            let tanks = match tank {
+                Tank::Fixed(per_port) => {
+                    coupling["tank_j"] = json!(per_port);
+                    per_port * port_count as f64
+                }
+                Tank::Share(share) => {
+                    coupling["tank_share"] = json!(share);
+                    share * peaks
+                }
+            };
+            coupling["tanks_j"] = json!(tanks);
             coupling["ports_taken_j"] = json!(ports.taken);
             coupling["ports_given_j"] = json!(ports.given);
             coupling["dissipated_j"] = json!(ports.dissipated);
