@@ -20,6 +20,30 @@ use crate::input::pointer::Pointer;
 /// Most `--set` overrides on one command line.
 pub const MAX_OVERRIDES: usize = 1000;
 
+/// Makes the relative FMU paths of the scenario JSON `json`, read from the file at
+/// `path`, relative to the working directory instead of the file's directory, so that
+/// a variant the studies (`tradeoff`, `stability-map`, `coupling`) build from the JSON
+/// and validate without a file reads the same FMUs as the file does. A path that is
+/// absolute, or whose directory is not UTF-8, is left as it is.
+pub fn anchor_fmu_paths(json: &mut Value, path: &Path) {
+    let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) else {
+        return;
+    };
+    let Some(fmus) = json.get_mut("fmus").and_then(Value::as_array_mut) else {
+        return;
+    };
+    for fmu in fmus {
+        let Some(Value::String(file)) = fmu.get_mut("path") else {
+            continue;
+        };
+        if Path::new(file.as_str()).is_relative() {
+            if let Some(joined) = dir.join(file.as_str()).to_str() {
+                *file = joined.to_string();
+            }
+        }
+    }
+}
+
 /// The scenario of the file at `path` with `sets` applied, and its JSON text (what the
 /// run directory keeps as `scenario.json`). Without overrides the text is the file's
 /// own bytes.

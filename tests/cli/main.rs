@@ -108,6 +108,32 @@ fn shipped_scenarios_validate() {
     assert!(checked > 10, "only {checked} shipped scenarios found");
 }
 
+/// The studies read a scene's FMUs beside its scenario file, as `run` does, whatever
+/// the working directory; `tradeoff`'s monolithic reference keeps the channels the
+/// FMU's connections ride (it dropped them: "unknown channel").
+#[test]
+fn studies_of_an_fmu_scene_read_its_fmus_beside_the_scenario() {
+    let dir = scratch("fmu_studies");
+    let elsewhere = scratch("fmu_studies_cwd");
+    let file = repo().join("scenarios").join("fmu_grid_pd.json");
+    let scen = fmu_build::beside_test_fmus(&file, &dir).unwrap_or_else(|e| panic!("{e}"));
+    for (command, written) in [
+        ("stability-map", "stability_map.csv"),
+        ("tradeoff", "tradeoff.csv"),
+    ] {
+        let out = elsewhere.join(command);
+        let o = bin()
+            .current_dir(&elsewhere)
+            .args([command, scen.to_str().expect("utf-8 path"), "--out"])
+            .arg(&out)
+            .args(["--duration", "0.05", "-q"])
+            .output()
+            .expect("spawn dsmcosim");
+        assert!(o.status.success(), "{command}: {}", said(&o));
+        assert!(out.join(written).is_file(), "{command} wrote no {written}");
+    }
+}
+
 #[test]
 fn run_writes_the_output_contract_and_is_deterministic() {
     let dir = scratch("contract");
