@@ -201,6 +201,21 @@ pub fn run_keeping_scenario(
     out: &Path,
     options: RunOptions,
 ) -> Result<Outcome> {
+    run_keeping_scenario_of(scenario, text, None, out, options)
+}
+
+/// [`run_keeping_scenario`] of the scenario file `source`: the copy's relative FMU paths
+/// point from `out` to the FMUs the file names
+/// ([`crate::scenario::relocated_fmu_paths`]), so that `dsmcosim run OUT/scenario.json`
+/// reruns the scene. `provenance.scenario_blake3` stays the hash of `text`, the file
+/// as read.
+pub fn run_keeping_scenario_of(
+    scenario: Scenario,
+    text: &str,
+    source: Option<&Path>,
+    out: &Path,
+    options: RunOptions,
+) -> Result<Outcome> {
     let options = RunOptions {
         scenario_blake3: options
             .scenario_blake3
@@ -217,7 +232,9 @@ pub fn run_keeping_scenario(
                 | Error::Interrupted { .. })
         )
     {
-        write_atomic(&out.join("scenario.json"), text.as_bytes())?;
+        let relocated = source.and_then(|f| crate::scenario::relocated_fmu_paths(text, f, out));
+        let kept = relocated.as_deref().unwrap_or(text);
+        write_atomic(&out.join("scenario.json"), kept.as_bytes())?;
     }
     result
 }
@@ -278,7 +295,8 @@ fn keep_scenario_of_checkpoint(checkpoint: &Path, out: &Path, name: &str) -> Res
         .and_then(|v| v.get("name").and_then(|n| n.as_str()).map(|n| n == name))
         .unwrap_or(false);
     if names_it {
-        write_atomic(&target, text.as_bytes())?;
+        let relocated = crate::scenario::relocated_fmu_paths(&text, &source, out);
+        write_atomic(&target, relocated.as_deref().unwrap_or(&text).as_bytes())?;
     }
     Ok(())
 }
