@@ -717,7 +717,8 @@ pub fn execute(command: Command) -> crate::Result<()> {
                 say!("{}: {}", scenario.display(), plan.text());
             }
             let name = s.name.clone();
-            let outcome = crate::run::run_keeping_scenario(s, &text, &out, options)?;
+            let outcome =
+                crate::run::run_keeping_scenario_of(s, &text, Some(&scenario), &out, options)?;
             report(&name, &outcome, &out);
             Ok(())
         }

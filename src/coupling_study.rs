@@ -338,6 +338,7 @@ pub fn study(
     }
     let mut base: Value = serde_json::from_str(&text)
         .map_err(|e| Error::invalid("scenario", format!("not JSON: {e}")))?;
+    crate::scenario::anchor_fmu_paths(&mut base, path);
     if let Some(d) = duration {
         if !(d.is_finite() && d > 0.0 && d <= scenario.duration.as_secs_f64()) {
             return Err(Error::invalid(

@@ -19,7 +19,7 @@ use crate::kernel::SimTime;
 use crate::output::run_dir::claim;
 use crate::output::{write_atomic, AtomicFile};
 use crate::report::{envelope, write_line_plot, LinePlot, Scale, Series};
-use crate::scenario::model::{Scenario, Solver, Stabilizer};
+use crate::scenario::model::{Scenario, Solver, Stabilizer, Tank};
 use crate::trace::{NetworkLog, Recorder};
 
 pub mod budget;
@@ -201,6 +201,21 @@ pub fn run_keeping_scenario(
     out: &Path,
     options: RunOptions,
 ) -> Result<Outcome> {
+    run_keeping_scenario_of(scenario, text, None, out, options)
+}
+
+/// [`run_keeping_scenario`] of the scenario file `source`: the copy's relative FMU paths
+/// point from `out` to the FMUs the file names
+/// ([`crate::scenario::relocated_fmu_paths`]), so that `dsmcosim run OUT/scenario.json`
+/// reruns the scene. `provenance.scenario_blake3` stays the hash of `text`, the file
+/// as read.
+pub fn run_keeping_scenario_of(
+    scenario: Scenario,
+    text: &str,
+    source: Option<&Path>,
+    out: &Path,
+    options: RunOptions,
+) -> Result<Outcome> {
     let options = RunOptions {
         scenario_blake3: options
             .scenario_blake3
@@ -217,7 +232,9 @@ pub fn run_keeping_scenario(
                 | Error::Interrupted { .. })
         )
     {
-        write_atomic(&out.join("scenario.json"), text.as_bytes())?;
+        let relocated = source.and_then(|f| crate::scenario::relocated_fmu_paths(text, f, out));
+        let kept = relocated.as_deref().unwrap_or(text);
+        write_atomic(&out.join("scenario.json"), kept.as_bytes())?;
     }
     result
 }
@@ -278,7 +295,8 @@ fn keep_scenario_of_checkpoint(checkpoint: &Path, out: &Path, name: &str) -> Res
         .and_then(|v| v.get("name").and_then(|n| n.as_str()).map(|n| n == name))
         .unwrap_or(false);
     if names_it {
-        write_atomic(&target, text.as_bytes())?;
+        let relocated = crate::scenario::relocated_fmu_paths(&text, &source, out);
+        write_atomic(&target, relocated.as_deref().unwrap_or(&text).as_bytes())?;
     }
     Ok(())
 }
@@ -658,15 +676,29 @@ fn write_summary(out: &Path, run: &Ran) -> Result<()> {
     }
     if let Some(p) = &scenario.partition {
         let mut ports = crate::partition::coupling::PortAccount::default();
+        let (mut port_count, mut peaks) = (0, 0.0);
         for node in world.nodes() {
             let e = node.port_energy();
             ports.taken += e.taken;
             ports.given += e.given;
             ports.dissipated += e.dissipated;
+            port_count += node.bodies.len() - node.owned;
+            peaks += node.energy_scale();
         }
         let mut coupling = json!({"scheme": p.coupling.name()});
         if let Some(tank) = p.coupling.tank() {
-            coupling["tank_j"] = json!(tank);
+            // What the coupling could create over the run, all nodes together.
+            let tanks = match tank {
+                Tank::Fixed(per_port) => {
+                    coupling["tank_j"] = json!(per_port);
+                    per_port * port_count as f64
+                }
+                Tank::Share(share) => {
+                    coupling["tank_share"] = json!(share);
+                    share * peaks
+                }
+            };
+            coupling["tanks_j"] = json!(tanks);
             coupling["ports_taken_j"] = json!(ports.taken);
             coupling["ports_given_j"] = json!(ports.given);
             coupling["dissipated_j"] = json!(ports.dissipated);

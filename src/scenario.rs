@@ -8,5 +8,5 @@ pub mod overrides;
 pub mod validate;
 
 pub use model::Scenario;
-pub use overrides::load_with;
+pub use overrides::{anchor_fmu_paths, load_with, relocated_fmu_paths};
 pub use validate::{load, parse_at, parse_str};

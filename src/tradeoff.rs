@@ -145,8 +145,9 @@ pub struct Options {
 /// Reads a scenario file: the raw JSON (to edit) and the validated base.
 pub fn load_json(path: &Path, sets: &[String]) -> Result<(Value, Scenario)> {
     let (scenario, text) = crate::scenario::load_with(path, sets)?;
-    let json: Value = serde_json::from_str(&text)
+    let mut json: Value = serde_json::from_str(&text)
         .map_err(|e| Error::invalid(path.display().to_string(), format!("not JSON: {e}")))?;
+    crate::scenario::anchor_fmu_paths(&mut json, path);
     Ok((json, scenario))
 }
 

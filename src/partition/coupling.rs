@@ -83,6 +83,14 @@ impl PortAccount {
         allowed
     }
 
+    /// Books power `p > 0` [W] applied over `dt` [s] of which the brake removed
+    /// `removed` [W] (less than the account asked for: the brake's cap).
+    pub fn book_removed(&mut self, p: f64, dt: f64, removed: f64) {
+        let removed = removed.clamp(0.0, p);
+        self.given += (p - removed) * dt;
+        self.dissipated += removed * dt;
+    }
+
     /// A report of the other side's `taken` (reports may arrive out of order).
     pub fn report(&mut self, taken: f64) {
         self.received = self.received.max(taken);

@@ -55,6 +55,15 @@ struct CouplingState {
     side_powers: Vec<f64>,
     /// Scratch (`passive`): (ghost port, far end, power) of every border link's own end.
     end_powers: Vec<(usize, usize, f64)>,
+    /// `passive` with a tank sized by share: each owned body's mass [kg] and principal
+    /// inertia [kg·m²]; empty otherwise.
+    own_masses: Vec<(f64, Vector3<f64>)>,
+    /// `passive` with a tank sized by share: the largest kinetic energy the owned
+    /// bodies have held so far, against the centre of mass's velocity [J].
+    peak_kinetic: f64,
+    /// `passive` with a tank sized by share: the work the scene's forces and
+    /// connections' inputs have done on the owned bodies where it was positive [J].
+    driven_in: f64,
 }
 
 /// A ghost's last received state (for the `hold` mode).
@@ -282,6 +291,19 @@ impl Node {
             held_now: Vec::new(),
             side_powers: Vec::new(),
             end_powers: Vec::new(),
+            own_masses: if scheme.tank().and_then(|t| t.share()).is_some() {
+                bodies[..owned]
+                    .iter()
+                    .map(|&g| {
+                        let b = &scenario.bodies[g];
+                        (b.mass, b.inertia)
+                    })
+                    .collect()
+            } else {
+                Vec::new()
+            },
+            peak_kinetic: 0.0,
+            driven_in: 0.0,
         };
         let mut coupling = coupling;
         if scheme.tank().is_some() {
@@ -807,7 +829,7 @@ impl Node {
         }
         self.book_step_impulses(t, cap);
         if let Some(tank) = self.coupling.scheme.tank() {
-            self.passivity(tank);
+            self.passivity(tank, t);
         }
         self.give_back_momentum();
         self.step_lines(t);

@@ -172,6 +172,10 @@ impl Default for Limits {
 pub struct Estimate {
     /// Integration steps.
     pub steps: u64,
+    /// FMU communication steps (`doStep` calls) over the run, all FMUs together, and
+    /// the FMU with the most (its index): an FMU stepping faster than `dt` takes
+    /// `dt / step` of them per integration step, each counted against `--max-steps`.
+    pub fmu_steps: (u64, Option<usize>),
     /// Rows of trace.csv (header excluded), exactly.
     pub trace_rows: u64,
     /// Values per trace row.
@@ -212,6 +216,15 @@ impl Estimate {
     /// The estimate for `scenario`, with checkpoints every `checkpoint_every`.
     pub fn of(scenario: &Scenario, checkpoint_every: Option<SimTime>) -> Estimate {
         let steps = scenario.steps;
+        let mut fmu_steps = (0u64, None);
+        let mut most = 0;
+        for (i, f) in scenario.fmus.iter().enumerate() {
+            let n = scenario.duration.0 / f.step.0.max(1);
+            fmu_steps.0 = fmu_steps.0.saturating_add(n);
+            if n > most {
+                (most, fmu_steps.1) = (n, Some(i));
+            }
+        }
         let decimation = scenario.output.decimation.max(1);
         // Every decimation-th step from step 0, and the last step always.
         let trace_rows = steps / decimation + 1 + u64::from(!steps.is_multiple_of(decimation));
@@ -257,6 +270,7 @@ impl Estimate {
             .saturating_add(BYTES_PER_FACTOR_ENTRY.saturating_mul(factor_entries));
         Estimate {
             steps,
+            fmu_steps,
             trace_rows,
             trace_columns,
             trace_bytes,
@@ -278,6 +292,20 @@ impl Estimate {
                     self.steps, limits.max_steps
                 ),
             ));
+        }
+        if let (fmu, Some(i)) = self.fmu_steps {
+            let total = self.steps.saturating_add(fmu);
+            if total > limits.max_steps {
+                return Err(Error::invalid(
+                    format!("fmus[{i}].step"),
+                    format!(
+                        "the run takes {} integration steps and {fmu} FMU steps, {total} \
+                         together, above the limit of {} (a longer FMU step, a shorter run, \
+                         or --max-steps)",
+                        self.steps, limits.max_steps
+                    ),
+                ));
+            }
         }
         if self.trace_bytes > limits.max_output_bytes {
             return Err(Error::invalid(

@@ -83,6 +83,8 @@ pub struct TdmaPlan {
 pub struct CostPlan {
     /// Integration steps.
     pub steps: u64,
+    /// FMU communication steps, all FMUs together.
+    pub fmu_steps: u64,
     /// Messages sent (ideal channels: every route every period; TDMA: every route every
     /// achieved period, an estimate — drift and losses move it).
     pub messages: u64,
@@ -293,6 +295,7 @@ pub fn plan(scenario: &Scenario) -> Result<RunPlan> {
             .and_then(|c| serde_json::to_value(c).ok()),
         cost: CostPlan {
             steps: estimate.steps,
+            fmu_steps: estimate.fmu_steps.0,
             messages,
             events,
             trace_rows: estimate.trace_rows,
@@ -417,8 +420,13 @@ impl RunPlan {
             out.push(format!("controller: {c}"));
         }
         out.push(format!(
-            "a run takes {} steps, about {} messages and {} kernel events (at the scenario's τ), writes {} trace rows (trace.csv at most {} bytes), and needs about {} MB of memory",
+            "a run takes {} steps{}, about {} messages and {} kernel events (at the scenario's τ), writes {} trace rows (trace.csv at most {} bytes), and needs about {} MB of memory",
             self.cost.steps,
+            if self.cost.fmu_steps > 0 {
+                format!(" and {} FMU steps", self.cost.fmu_steps)
+            } else {
+                String::new()
+            },
             self.cost.messages,
             self.cost.events,
             self.cost.trace_rows,

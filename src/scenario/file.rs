@@ -804,8 +804,9 @@ pub struct PartitionFile {
     /// at the sample's time, apply `F + Ḟ·age`), `"passive"` (predict over an energy
     /// tank per border port, transmission lines where the data can be older than
     /// `lines_above`) or `"tlm"` (every border link a transmission line), or an object
-    /// `{"scheme": …, "tank": J, "extrapolate": s, "impedance": N·s/m, "lines_above": s}`;
-    /// default `"passive"` with a 40 J tank, 0.01 s of extrapolation and lines
+    /// `{"scheme": …, "tank": J, "tank_share": r, "extrapolate": s, "impedance": N·s/m,
+    /// "lines_above": s}`; default `"passive"` with each node's tank a tenth of the
+    /// largest kinetic energy its bodies have held, 0.01 s of extrapolation and lines
     /// above 0.04 s (bounded on the thesis scene and the 16-node scene up to τ = 50 ms
     /// and the most accurate scheme there; see docs/guide.md "Coupling across
     /// partitions").
@@ -838,7 +839,7 @@ pub enum GhostsFile {
 pub enum CouplingFile {
     /// `"reset"`, `"predict"` or `"passive"` (with its default tank).
     Name(CouplingName),
-    /// `{"scheme": …, "tank": J}`.
+    /// `{"scheme": …, "tank": J, …}`.
     Spec(CouplingSpecFile),
 }
 
@@ -874,9 +875,15 @@ pub enum CouplingName {
 pub struct CouplingSpecFile {
     /// The scheme.
     pub scheme: CouplingName,
-    /// `passive`: initial energy of each border port's tank [J], ≥ 0; default 40 J.
+    /// `passive`: a fixed tank, the energy [J] each border port may create, ≥ 0, in
+    /// place of the default `tank_share`.
     #[serde(default)]
     pub tank: Option<f64>,
+    /// `passive`: each node's tank as a share of the largest kinetic energy its own
+    /// bodies have held so far (against the centre of mass's velocity), in [0, 10];
+    /// default 0.1. Not with `tank`.
+    #[serde(default)]
+    pub tank_share: Option<f64>,
     /// `predict` and `passive`: the longest time a border force or owner-side load is
     /// carried forward by its rate [s], ≥ 0 (older samples are held at that value);
     /// default 0.01 s.

@@ -406,13 +406,13 @@ pub enum Coupling {
         /// Longest time a force is carried forward by its rate [ns].
         extrapolate: SimTime,
     },
-    /// `predict` over an energy account per border port: each side gives its bodies
-    /// only the energy the other side has taken in (as last reported) plus half the
-    /// initial tank; a passivity controller dissipates the rest. The coupling can then
-    /// create at most `tank` per port, whatever the delay, jitter or loss.
+    /// `predict` over an energy account per border port: each node gives its bodies
+    /// only the energy the other sides of its ports have taken in (as last reported)
+    /// plus its [`Tank`]; a passivity controller dissipates the rest. The coupling can
+    /// then create at most the tanks, whatever the delay, jitter or loss.
     Passive {
-        /// Initial energy of each port's tank [J], split between its two sides.
-        tank: f64,
+        /// How much energy the coupling may create.
+        tank: Tank,
         /// Longest time a force is carried forward by its rate [ns].
         extrapolate: SimTime,
         /// Border links whose samples can grow older than this become transmission
@@ -427,6 +427,36 @@ pub enum Coupling {
         /// The lines' impedance.
         lines: Lines,
     },
+}
+
+/// How much energy the `passive` coupling may create before its brake acts.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub enum Tank {
+    /// A fixed energy per border port [J], half on each side (`"tank": J`).
+    Fixed(f64),
+    /// Per node, this share of the largest kinetic energy the node's own bodies have
+    /// held so far, measured against the centre of mass's velocity (`"tank_share"`;
+    /// the default): the coupling can never create more than a share of the energy
+    /// the mechanism itself has.
+    Share(f64),
+}
+
+impl Tank {
+    /// A fixed tank per port [J]; zero for a share.
+    pub fn per_port(self) -> f64 {
+        match self {
+            Tank::Fixed(tank) => tank,
+            Tank::Share(_) => 0.0,
+        }
+    }
+
+    /// The share of the node's largest kinetic energy; `None` for a fixed tank.
+    pub fn share(self) -> Option<f64> {
+        match self {
+            Tank::Fixed(_) => None,
+            Tank::Share(share) => Some(share),
+        }
+    }
 }
 
 /// Which border links a scheme turns into transmission-line (TLM) links, and their
@@ -476,8 +506,8 @@ impl Coupling {
         }
     }
 
-    /// The initial tank per port [J] of the `passive` scheme.
-    pub fn tank(self) -> Option<f64> {
+    /// The tank of the `passive` scheme.
+    pub fn tank(self) -> Option<Tank> {
         match self {
             Coupling::Passive { tank, .. } => Some(tank),
             _ => None,

@@ -20,6 +20,72 @@ use crate::input::pointer::Pointer;
 /// Most `--set` overrides on one command line.
 pub const MAX_OVERRIDES: usize = 1000;
 
+/// Makes the relative FMU paths of the scenario JSON `json`, read from the file at
+/// `path`, relative to the working directory instead of the file's directory, so that
+/// a variant the studies (`tradeoff`, `stability-map`, `coupling`) build from the JSON
+/// and validate without a file reads the same FMUs as the file does. A path that is
+/// absolute, or whose directory is not UTF-8, is left as it is.
+pub fn anchor_fmu_paths(json: &mut Value, path: &Path) {
+    let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) else {
+        return;
+    };
+    let Some(fmus) = json.get_mut("fmus").and_then(Value::as_array_mut) else {
+        return;
+    };
+    for fmu in fmus {
+        let Some(Value::String(file)) = fmu.get_mut("path") else {
+            continue;
+        };
+        if Path::new(file.as_str()).is_relative() {
+            if let Some(joined) = dir.join(file.as_str()).to_str() {
+                *file = joined.to_string();
+            }
+        }
+    }
+}
+
+/// The scenario text `text`, read from the file at `path`, as a copy kept in the
+/// directory `dir` must read to load the same FMUs: each relative `fmus[].path`
+/// rewritten relative to `dir`. `None` where no path needs to change (no FMUs, only
+/// absolute paths, or `dir` beside the file), or where the text is not JSON or a file
+/// cannot be found (the copy is then kept as it is).
+///
+/// *Why*: a run directory keeps its scenario as `scenario.json`; with the file's
+/// `fmu/pd.fmu` kept as it was, `dsmcosim run RUN/scenario.json` looked for
+/// `RUN/fmu/pd.fmu` and could not rerun an FMU scene.
+pub fn relocated_fmu_paths(text: &str, path: &Path, dir: &Path) -> Option<String> {
+    let from = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let (from, to) = (
+        std::fs::canonicalize(from).ok()?,
+        std::fs::canonicalize(dir).ok()?,
+    );
+    if from == to {
+        return None;
+    }
+    let mut json: Value = serde_json::from_str(text).ok()?;
+    let mut changed = false;
+    for fmu in json.get_mut("fmus")?.as_array_mut()? {
+        let Some(Value::String(file)) = fmu.get_mut("path") else {
+            continue;
+        };
+        if Path::new(file.as_str()).is_absolute() {
+            continue;
+        }
+        let target = std::fs::canonicalize(from.join(file.as_str())).ok()?;
+        let relative = pathdiff::diff_paths(&target, &to)?;
+        *file = relative.to_str()?.to_string();
+        changed = true;
+    }
+    changed.then(|| {
+        let mut out = serde_json::to_string_pretty(&json).unwrap_or_else(|_| text.to_string());
+        out.push('\n');
+        out
+    })
+}
+
 /// The scenario of the file at `path` with `sets` applied, and its JSON text (what the
 /// run directory keeps as `scenario.json`). Without overrides the text is the file's
 /// own bytes.

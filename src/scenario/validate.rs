@@ -45,7 +45,9 @@ use self::joints::joint_rows;
 pub use self::joints::MAX_JOINTS;
 use self::network::{check_tdma, network};
 use self::partition::partition;
-pub use self::partition::{DEFAULT_EXTRAPOLATE, DEFAULT_LINES_ABOVE, DEFAULT_TANK};
+pub use self::partition::{
+    DEFAULT_EXTRAPOLATE, DEFAULT_LINES_ABOVE, DEFAULT_TANK, DEFAULT_TANK_SHARE, MAX_TANK_SHARE,
+};
 use super::file::{
     BodyModelFile, ForceFile, IntegratorFile, MeasurementFile, ModelFile, OutputFile, ScenarioFile,
     SolverFile, SolverKind, StabilizerFile, StabilizerKind, DEFAULT_BAUMGARTE_RATE,
@@ -369,8 +371,8 @@ pub fn validate(file: ScenarioFile) -> Result<Scenario> {
             p,
             file.model.grid.as_ref(),
             &ids,
-            &bodies,
-            &links,
+            (&bodies, &links),
+            !file.model.joints.is_empty(),
         )?),
         None => None,
     };

@@ -421,14 +421,24 @@ pub const KNOBS: &[Knob] = &[
     },
 ];
 
-/// The reference of `base`: monolithic (no partition, channels, network or
-/// controller), classical RK4, exact solve, step `dt`; same bodies, links, forces and
-/// stabilizer.
+/// The reference of `base`: monolithic (no partition, network or controller, and no
+/// channels unless connections ride them), classical RK4, exact solve, step `dt`; same
+/// bodies, links, forces, stabilizer, FMUs and connections.
+///
+/// A scene's connections (an FMU's inputs and outputs) are part of the model it
+/// simulates, delays included, so their channels stay, on the ideal network; removed,
+/// the reference of an FMU scene failed to validate ("unknown channel").
 pub fn reference(base: &Value, dt: SimTime) -> Result<Scenario> {
     let mut v = base.clone();
+    let connected = v
+        .get("connections")
+        .and_then(Value::as_array)
+        .is_some_and(|c| !c.is_empty());
     if let Some(o) = v.as_object_mut() {
         for key in ["partition", "channels", "network", "controller"] {
-            o.remove(key);
+            if key != "channels" || !connected {
+                o.remove(key);
+            }
         }
     }
     set(&mut v, "/integrator", json!("rk4"));

@@ -132,6 +132,27 @@ fn sizes_and_times_legal_one_by_one_but_not_together_are_refused_at_once() {
 /// about 130 GB, and the scene was refused; in AMD order it needs about 4.0 GB (3.4 GB
 /// measured), so it plans within the default limit, and a lower `--max-memory` refuses
 /// it at once naming the solver and the CG path's need (about 2.5 GB), nothing written.
+/// An FMU stepping far faster than the bodies counts its steps against the step
+/// limit: 200 s of 1-ns FMU steps (2·10¹¹ `doStep` calls beside 200 000 integration
+/// steps) is refused naming the FMU's step; `validate` said "200000 steps" before.
+#[test]
+fn an_fmu_stepping_every_nanosecond_counts_its_steps_against_the_limit() {
+    let dir = scratch("limits_fmu_steps");
+    let file = super::repo().join("scenarios").join("fmu_grid_pd.json");
+    let scen = super::fmu_build::beside_test_fmus(&file, &dir).unwrap_or_else(|e| panic!("{e}"));
+    let mut v: Value = serde_json::from_str(&std::fs::read_to_string(&scen).unwrap()).unwrap();
+    v["duration"] = json!(200.0);
+    v["fmus"][0]["step"] = json!(1e-9);
+    refused(&dir, "fmu_ns", &v, "fmus[0].step", "200000000000 FMU steps");
+    // At a 1-ms step the same FMU validates, and the plan counts its steps.
+    v["fmus"][0]["step"] = json!(0.001);
+    let f = write_json(&dir, "fmu_ms.json", &v);
+    let o = bounded(&["validate", f.to_str().unwrap()], Duration::from_secs(300));
+    assert!(o.status.success(), "{}", said(&o));
+    let plan = String::from_utf8_lossy(&o.stdout);
+    assert!(plan.contains("200000 steps and 200000 FMU steps"), "{plan}");
+}
+
 #[test]
 fn a_million_body_exact_solve_is_planned_from_its_ordered_factor() {
     let dir = scratch("limits_exact");

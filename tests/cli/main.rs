@@ -108,6 +108,62 @@ fn shipped_scenarios_validate() {
     assert!(checked > 10, "only {checked} shipped scenarios found");
 }
 
+/// The studies read a scene's FMUs beside its scenario file, as `run` does, whatever
+/// the working directory; `tradeoff`'s monolithic reference keeps the channels the
+/// FMU's connections ride (it dropped them: "unknown channel").
+#[test]
+fn studies_of_an_fmu_scene_read_its_fmus_beside_the_scenario() {
+    let dir = scratch("fmu_studies");
+    let elsewhere = scratch("fmu_studies_cwd");
+    let file = repo().join("scenarios").join("fmu_grid_pd.json");
+    let scen = fmu_build::beside_test_fmus(&file, &dir).unwrap_or_else(|e| panic!("{e}"));
+    for (command, written) in [
+        ("stability-map", "stability_map.csv"),
+        ("tradeoff", "tradeoff.csv"),
+    ] {
+        let out = elsewhere.join(command);
+        let o = bin()
+            .current_dir(&elsewhere)
+            .args([command, scen.to_str().expect("utf-8 path"), "--out"])
+            .arg(&out)
+            .args(["--duration", "0.05", "-q"])
+            .output()
+            .expect("spawn dsmcosim");
+        assert!(o.status.success(), "{command}: {}", said(&o));
+        assert!(out.join(written).is_file(), "{command} wrote no {written}");
+    }
+}
+
+/// A run of an FMU scene keeps a scenario.json that reruns it: its relative FMU paths
+/// point from the run directory to the same files, and the rerun has the same digest.
+#[test]
+fn a_runs_own_scenario_copy_reruns_an_fmu_scene() {
+    let dir = scratch("fmu_rerun");
+    let file = repo().join("scenarios").join("fmu_grid_pd.json");
+    let scen = fmu_build::beside_test_fmus(&file, &dir).unwrap_or_else(|e| panic!("{e}"));
+    let (first, again) = (dir.join("runs").join("first"), dir.join("again"));
+    let o = run(&[
+        "run",
+        scen.to_str().unwrap(),
+        "--out",
+        first.to_str().unwrap(),
+        "--set",
+        "/duration=1",
+    ]);
+    assert!(o.status.success(), "{}", said(&o));
+    let copy = first.join("scenario.json");
+    let kept: Value = serde_json::from_str(&std::fs::read_to_string(&copy).unwrap()).unwrap();
+    assert_eq!(kept["fmus"][0]["path"], json!("../../fmu/pd.fmu"), "{kept}");
+    let o = run(&[
+        "run",
+        copy.to_str().unwrap(),
+        "--out",
+        again.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", said(&o));
+    assert_eq!(summary(&first)["digest"], summary(&again)["digest"]);
+}
+
 #[test]
 fn run_writes_the_output_contract_and_is_deterministic() {
     let dir = scratch("contract");

@@ -646,6 +646,20 @@ fn partitions_are_checked() {
 
 #[test]
 #[rustfmt::skip]
+fn couplings_are_checked() {
+    let coupling = |c: Value| set_part("/partition/coupling", c);
+    invalid(coupling(json!({"scheme": "predict", "tank": 1})), "partition.coupling.tank", "only the \"passive\" scheme has a tank");
+    invalid(coupling(json!({"scheme": "tlm", "tank_share": 0.1})), "partition.coupling.tank_share", "only the \"passive\" scheme has a tank");
+    invalid(coupling(json!({"scheme": "passive", "tank": 1, "tank_share": 0.1})), "partition.coupling.tank_share", "not both");
+    invalid(coupling(json!({"scheme": "passive", "tank": -1})), "partition.coupling.tank", "finite energy ≥ 0 J, got -1");
+    invalid(coupling(json!({"scheme": "passive", "tank_share": 11})), "partition.coupling.tank_share", "between 0 and 10, got 11");
+    invalid(coupling(json!({"scheme": "passive", "tank_share": -0.5})), "partition.coupling.tank_share", "got -0.5");
+    invalid(coupling(json!({"scheme": "passive", "tank_share": "a tenth"})), "partition.coupling", "");
+    invalid(coupling(json!({"scheme": "passive", "extrapolate": 11})), "partition.coupling.extrapolate", "between 0 and 10 s");
+}
+
+#[test]
+#[rustfmt::skip]
 fn link_owners_are_checked() {
     let owners = |o: Value| set_part("/partition/link_owners", o);
     invalid(owners(json!([{"link": 0, "node": 1}])), "partition.link_owners[0].link", "no link 0 (links are numbered 1 to 24)");

@@ -332,7 +332,7 @@ mod tests {
             Coupling::Reset,
             Coupling::Predict { extrapolate: x },
             Coupling::Passive {
-                tank: 1.0,
+                tank: crate::scenario::model::Tank::Fixed(1.0),
                 extrapolate: x,
                 lines: crate::scenario::model::Lines {
                     above: SimTime(u64::MAX),

@@ -14,16 +14,17 @@ use crate::scenario::file::{
     CouplingFile, CouplingName, CouplingSpecFile, GhostsFile, GridFile, LinkOwnerFile,
     PartitionFile,
 };
-use crate::scenario::model::{BodySpec, Coupling, GhostMode, Lines, LinkSpec, PartitionSpec};
+use crate::scenario::model::{BodySpec, Coupling, GhostMode, Lines, LinkSpec, PartitionSpec, Tank};
 
 /// Validates `partition` against the model (`grid` is the model's grid section, if it
-/// is one; `bodies` and `links` are the validated model in file order).
+/// is one; `bodies` and `links` are the validated model in file order; `joints`:
+/// whether the model has joints, which chooses the default tank).
 pub(super) fn partition(
     p: &PartitionFile,
     grid: Option<&GridFile>,
     ids: &Ids,
-    bodies: &[BodySpec],
-    links: &[LinkSpec],
+    (bodies, links): (&[BodySpec], &[LinkSpec]),
+    joints: bool,
 ) -> Result<PartitionSpec> {
     let (nodes, node_of, ring) = match (&p.nodes, p.quadrants) {
         (Some(lists), false) => {
@@ -82,27 +83,43 @@ pub(super) fn partition(
             GhostsFile::Integrate => GhostMode::Integrate,
             GhostsFile::Hold => GhostMode::Hold,
         },
-        coupling: coupling(&p.coupling)?,
+        coupling: coupling(&p.coupling, joints)?,
     })
 }
 
-/// The default initial tank of the `passive` coupling per border port [J], and the
-/// default extrapolation horizon of `predict` and `passive` [s]: chosen on the thesis
-/// scene (docs/guide.md "Coupling across partitions" gives the measurements).
+/// The default tank of the `passive` coupling on a scene of distance links, per border
+/// port [J]: chosen on the thesis net (docs/method.md §3.1 gives the measurements).
 pub const DEFAULT_TANK: f64 = 40.0;
-/// See [`DEFAULT_TANK`].
+/// The default tank of the `passive` coupling on a scene with joints: each node's share
+/// of its energy scale, the largest kinetic energy its own bodies have held plus the
+/// work the scene's forces put into them (docs/method.md §3.1 gives the measurements).
+pub const DEFAULT_TANK_SHARE: f64 = 0.1;
+/// The largest `tank_share` accepted.
+pub const MAX_TANK_SHARE: f64 = 10.0;
+
+/// The default extrapolation horizon of `predict` and `passive` [s]: chosen on the
+/// thesis scene (docs/guide.md "Coupling across partitions" gives the measurements).
 pub const DEFAULT_EXTRAPOLATE: f64 = 0.01;
 
 /// The age above which the `passive` scheme turns a border link into a transmission
 /// line [s] (docs/guide.md "Coupling across partitions" gives the measurements).
 pub const DEFAULT_LINES_ABOVE: f64 = 0.04;
 
-/// `partition.coupling`.
-fn coupling(c: &CouplingFile) -> Result<Coupling> {
+/// `partition.coupling`; `joints`: whether the model has joints (the default tank).
+///
+/// *Why the default tank depends on the model*: on the thesis net the predictor's
+/// energy errors swing by far more than the net's own kinetic energy between reports
+/// and balance out over time; a tank sized from that energy (any share up to 1) brakes
+/// the swings and drains the net (method §3.1 measures it), while 40 J per port keeps
+/// it within its band. On a mechanism of joints the same 40 J exceeds what the whole
+/// mechanism holds (a double pendulum of 22 J took 34 J from the ports at 20 ms), so
+/// there the tank is a share of the mechanism's own energy.
+fn coupling(c: &CouplingFile, joints: bool) -> Result<Coupling> {
     let spec = match *c {
         CouplingFile::Name(scheme) => CouplingSpecFile {
             scheme,
             tank: None,
+            tank_share: None,
             extrapolate: None,
             impedance: None,
             lines_above: None,
@@ -127,6 +144,12 @@ fn coupling(c: &CouplingFile) -> Result<Coupling> {
     not_for(
         "tank",
         spec.tank,
+        &[Passive],
+        "only the \"passive\" scheme has a tank",
+    )?;
+    not_for(
+        "tank_share",
+        spec.tank_share,
         &[Passive],
         "only the \"passive\" scheme has a tank",
     )?;
@@ -171,13 +194,37 @@ fn coupling(c: &CouplingFile) -> Result<Coupling> {
         CouplingName::Reset => Ok(Coupling::Reset),
         Predict => Ok(Coupling::Predict { extrapolate }),
         Passive => {
-            let tank = spec.tank.unwrap_or(DEFAULT_TANK);
-            if !(tank.is_finite() && tank >= 0.0) {
-                return Err(Error::invalid(
-                    "partition.coupling.tank",
-                    format!("must be a finite energy ≥ 0 J, got {}", num(tank)),
-                ));
-            }
+            let tank = match (spec.tank, spec.tank_share) {
+                (Some(_), Some(_)) => {
+                    return Err(Error::invalid(
+                        "partition.coupling.tank_share",
+                        "give either a fixed \"tank\" [J] or a \"tank_share\", not both",
+                    ))
+                }
+                (Some(tank), None) => {
+                    if !(tank.is_finite() && tank >= 0.0) {
+                        return Err(Error::invalid(
+                            "partition.coupling.tank",
+                            format!("must be a finite energy ≥ 0 J, got {}", num(tank)),
+                        ));
+                    }
+                    Tank::Fixed(tank)
+                }
+                (None, None) if !joints => Tank::Fixed(DEFAULT_TANK),
+                (None, share) => {
+                    let share = share.unwrap_or(DEFAULT_TANK_SHARE);
+                    if !(0.0..=MAX_TANK_SHARE).contains(&share) {
+                        return Err(Error::invalid(
+                            "partition.coupling.tank_share",
+                            format!(
+                                "must be a share between 0 and {MAX_TANK_SHARE}, got {}",
+                                num(share)
+                            ),
+                        ));
+                    }
+                    Tank::Share(share)
+                }
+            };
             Ok(Coupling::Passive {
                 tank,
                 extrapolate,
