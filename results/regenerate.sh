@@ -38,7 +38,11 @@ cargo run --release --quiet --example build_fmus -- scenarios/fmu >/dev/null || 
 bin=target/release/dsmcosim
 key() { python3 -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])" "$1" "$2"; }
 tmp=$(mktemp -d results/.regenerate.XXXXXX) || exit 1
-trap 'rm -rf "$tmp"' EXIT
+# Each run goes to a directory beside the stored ones, at their depth: a run keeps its
+# scenario's FMU paths relative to where it is written (docs/reference.md,
+# scenario.json), so the move that replaces a stored run must not change its depth.
+fresh="$tmp.run"
+trap 'rm -rf "$tmp" "$fresh"' EXIT
 found=0
 for summary in results/*/summary.json; do
   [ -f "$summary" ] || continue
@@ -49,7 +53,6 @@ for summary in results/*/summary.json; do
   if [ ! -f "$scenario" ]; then echo "$dir: skipped, no $scenario"; continue; fi
   found=1
   old=$(key "$summary" digest 2>/dev/null || echo none)
-  fresh="$tmp/run"
   rm -rf "$fresh" "$tmp/old"
   "$bin" run "$scenario" --out "$fresh" >/dev/null 2>"$tmp/stderr"
   code=$?
