@@ -66,9 +66,9 @@ pub struct FmuUnit {
 }
 
 /// The variables of one type that one FMI call reads or sets.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 struct Group {
-    kind: Option<VarKind>,
+    kind: VarKind,
     vrs: Vec<u32>,
     /// The values in all (an array counts its elements).
     count: usize,
@@ -83,22 +83,26 @@ struct Group {
 fn groups(vars: &[FmuVar]) -> Vec<Group> {
     let mut out: Vec<Group> = Vec::new();
     for (k, v) in vars.iter().enumerate() {
-        let g = match out.iter().position(|g| g.kind == Some(v.kind)) {
-            Some(i) => &mut out[i],
+        let i = match out.iter().position(|g| g.kind == v.kind) {
+            Some(i) => i,
             None => {
                 out.push(Group {
-                    kind: Some(v.kind),
-                    ..Group::default()
+                    kind: v.kind,
+                    vrs: Vec::new(),
+                    count: 0,
+                    members: Vec::new(),
+                    reals: None,
                 });
-                out.last_mut().expect("ok: just pushed")
+                out.len() - 1
             }
         };
+        let g = &mut out[i];
         g.vrs.push(v.vr);
         g.count += v.len();
         g.members.push(k);
     }
     for g in &mut out {
-        if g.kind == Some(VarKind::Real) && g.count == g.vrs.len() {
+        if g.kind == VarKind::Real && g.count == g.vrs.len() {
             g.reals = Some(vec![0.0; g.count]);
         }
     }
@@ -135,7 +139,7 @@ fn read(
             }
             continue;
         }
-        let kind = g.kind.expect("ok: every group has its type");
+        let kind = g.kind;
         scratch.clear();
         inst.get_values(kind, &g.vrs, g.count, scratch)?;
         let mut values = scratch.drain(..);
@@ -310,7 +314,7 @@ impl FmuUnit {
                     inst.set_real(&g.vrs, buf).map_err(fmu_error)?;
                     continue;
                 }
-                let kind = g.kind.expect("ok: every group has its type");
+                let kind = g.kind;
                 self.scratch.clear();
                 let held = g.members.iter().map(|&k| self.inputs[k].clone());
                 self.scratch.extend(held);
