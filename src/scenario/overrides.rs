@@ -29,19 +29,28 @@ pub fn anchor_fmu_paths(json: &mut Value, path: &Path) {
     let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) else {
         return;
     };
+    map_relative_fmu_paths(json, |file| dir.join(file).to_str().map(str::to_string));
+}
+
+/// Replaces each relative `fmus[].path` of `json` by `new(path)` where that gives one;
+/// whether any was replaced.
+fn map_relative_fmu_paths(json: &mut Value, mut new: impl FnMut(&str) -> Option<String>) -> bool {
     let Some(fmus) = json.get_mut("fmus").and_then(Value::as_array_mut) else {
-        return;
+        return false;
     };
+    let mut changed = false;
     for fmu in fmus {
         let Some(Value::String(file)) = fmu.get_mut("path") else {
             continue;
         };
         if Path::new(file.as_str()).is_relative() {
-            if let Some(joined) = dir.join(file.as_str()).to_str() {
-                *file = joined.to_string();
+            if let Some(replaced) = new(file) {
+                *file = replaced;
+                changed = true;
             }
         }
     }
+    changed
 }
 
 /// The scenario text `text`, read from the file at `path`, as a copy kept in the
@@ -66,18 +75,17 @@ pub fn relocated_fmu_paths(text: &str, path: &Path, dir: &Path) -> Option<String
         return None;
     }
     let mut json: Value = serde_json::from_str(text).ok()?;
-    let mut changed = false;
-    for fmu in json.get_mut("fmus")?.as_array_mut()? {
-        let Some(Value::String(file)) = fmu.get_mut("path") else {
-            continue;
-        };
-        if Path::new(file.as_str()).is_absolute() {
-            continue;
-        }
-        let target = std::fs::canonicalize(from.join(file.as_str())).ok()?;
-        let relative = pathdiff::diff_paths(&target, &to)?;
-        *file = relative.to_str()?.to_string();
-        changed = true;
+    let mut missing = false;
+    let changed = map_relative_fmu_paths(&mut json, |file| {
+        let relative = std::fs::canonicalize(from.join(file))
+            .ok()
+            .and_then(|target| pathdiff::diff_paths(target, &to))
+            .and_then(|r| r.to_str().map(str::to_string));
+        missing |= relative.is_none();
+        relative
+    });
+    if missing {
+        return None;
     }
     changed.then(|| {
         let mut out = serde_json::to_string_pretty(&json).unwrap_or_else(|_| text.to_string());
