@@ -377,6 +377,21 @@ fn free_chain(split: Option<f64>) -> Value {
     shipped_split("free_chain5", split)
 }
 
+/// The targets of a split run's drifts `(|ΔP|, |ΔL|/|L|, ΔKE)` against its monolithic
+/// run's `(|ΔL|/|L|, ΔKE)`: momentum within 1 kg·m/s, |L| within 3 points, kinetic
+/// energy within −5/+2 points.
+fn drifts_as_monolithic(law: &Value, tau: f64, (p, l, e): (f64, f64, f64), (l0, e0): (f64, f64)) {
+    assert!(p <= 1.0, "{law}, τ = {tau}: |ΔP| {p}");
+    assert!(
+        (l - l0).abs() <= 0.03,
+        "{law}, τ = {tau}: |ΔL|/|L| {l} vs {l0}"
+    );
+    assert!(
+        e - e0 <= 0.02 && e - e0 >= -0.05,
+        "{law}, τ = {tau}: ΔKE {e} vs {e0}"
+    );
+}
+
 /// The largest `|ΔP|` [kg·m/s], `|ΔL|/|L₀|` and signed `ΔKE/KE₀` (the one of largest
 /// size) over a run.
 fn drifts(v: &Value) -> (f64, f64, f64) {
@@ -430,15 +445,7 @@ fn a_free_chain_split_at_a_border_joint_keeps_its_invariants() {
                 100.0 * l0,
                 100.0 * e0
             );
-            assert!(p <= 1.0, "{law}, τ = {tau}: |ΔP| {p}");
-            assert!(
-                (l - l0).abs() <= 0.03,
-                "{law}, τ = {tau}: |ΔL|/|L| {l} vs {l0}"
-            );
-            assert!(
-                e - e0 <= 0.02 && e - e0 >= -0.05,
-                "{law}, τ = {tau}: ΔKE {e} vs {e0}"
-            );
+            drifts_as_monolithic(&law, tau, (p, l, e), (l0, e0));
         }
     }
 }
@@ -591,15 +598,7 @@ fn a_hinge_across_a_partition_keeps_its_axes_and_the_invariants() {
                 );
             }
             if tau <= 0.005 {
-                assert!(p <= 1.0, "{law}, τ = {tau}: |ΔP| {p}");
-                assert!(
-                    (l - l0).abs() <= 0.03,
-                    "{law}, τ = {tau}: |ΔL|/|L| {l} vs {l0}"
-                );
-                assert!(
-                    e - e0 <= 0.02 && e - e0 >= -0.05,
-                    "{law}, τ = {tau}: ΔKE {e} vs {e0}"
-                );
+                drifts_as_monolithic(&law, tau, (p, l, e), (l0, e0));
             }
         }
     }
